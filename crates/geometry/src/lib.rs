@@ -1,0 +1,9 @@
+#![doc = include_str!("../README.md")]
+
+pub mod error;
+pub mod mesh;
+
+pub use error::{GeometryError, Result};
+pub use mesh::{LoadOptions, TriangleMesh, UrdfGeometryKind, load_mesh, load_mesh_with, write_obj};
+/// The math types of every public API: parry's (glam 0.33 through glamx), f32, metres.
+pub use parry3d::math::{Pose3, Rot3, Vec3};

@@ -1,0 +1,1 @@
+//! mvgrasp-grasp
