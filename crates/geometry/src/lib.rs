@@ -2,8 +2,12 @@
 
 pub mod error;
 pub mod mesh;
+pub mod properties;
+pub mod stable_poses;
 
 pub use error::{GeometryError, Result};
 pub use mesh::{LoadOptions, TriangleMesh, UrdfGeometryKind, load_mesh, load_mesh_with, write_obj};
 /// The math types of every public API: parry's (glam 0.33 through glamx), f32, metres.
 pub use parry3d::math::{Pose3, Rot3, Vec3};
+pub use properties::{DecompositionParams, MassFacts, Topology};
+pub use stable_poses::{StablePose, StablePoseParams, stable_poses};
