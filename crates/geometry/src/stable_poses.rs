@@ -20,6 +20,9 @@ use parry3d::math::{Pose3, Rot3, Vec3};
 use crate::error::{GeometryError, Result};
 use crate::mesh::TriangleMesh;
 
+/// Marginal resting faces are one rolling family only if their normals are within 30 degrees.
+const ROLLING_NEIGHBOUR_COS: f32 = 0.866;
+
 /// How to compute and select stable poses.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StablePoseParams {
@@ -39,7 +42,7 @@ impl Default for StablePoseParams {
         Self {
             max_poses: 10,
             min_probability: 0.01,
-            coplanar_tolerance_rad: 2f32.to_radians(),
+            coplanar_tolerance_rad: 5f32.to_radians(),
             min_tipping_angle_rad: 10f32.to_radians(),
         }
     }
@@ -76,17 +79,29 @@ pub fn stable_poses(mesh: &TriangleMesh, params: &StablePoseParams) -> Result<Ve
     let faces = HullFaces::new(&hull, params.coplanar_tolerance_rad);
     let n = faces.normal.len();
 
-    // Where each face drains to, and the probability it is first touched.
-    let next: Vec<Option<usize>> = (0..n).map(|f| faces.topples_to(f, com)).collect();
-    let sink_of = |mut f: usize| {
-        for _ in 0..n {
+    // Where each face drains to; a cycle (numerically flat ground) ends on the face that closes it.
+    let mut next: Vec<Option<usize>> = (0..n).map(|f| faces.topples_to(f, com)).collect();
+    let mut sinks = vec![usize::MAX; n];
+    for start in 0..n {
+        let mut path = Vec::new();
+        let mut f = start;
+        while sinks[f] == usize::MAX {
+            if path.contains(&f) {
+                next[f] = None;
+                sinks[f] = f;
+                break;
+            }
+            path.push(f);
             match next[f] {
                 Some(g) => f = g,
-                None => return f,
+                None => sinks[f] = f,
             }
         }
-        f // a cycle (numerically flat region): stop anywhere on it
-    };
+        let sink = sinks[f];
+        for g in path {
+            sinks[g] = sink;
+        }
+    }
     let solid_angle: Vec<f64> = (0..n).map(|f| faces.solid_angle(f, com)).collect();
     let total: f64 = solid_angle.iter().sum();
     if !(total > 0.0) {
@@ -96,7 +111,6 @@ pub fn stable_poses(mesh: &TriangleMesh, params: &StablePoseParams) -> Result<Ve
             path: mesh.origin().to_path_buf(),
         });
     }
-    let sinks: Vec<usize> = (0..n).map(sink_of).collect();
     let mut probability = vec![0f64; n];
     for f in 0..n {
         probability[sinks[f]] += solid_angle[f] / total;
@@ -115,7 +129,9 @@ pub fn stable_poses(mesh: &TriangleMesh, params: &StablePoseParams) -> Result<Ve
     }
     for (f, g) in faces.adjacent_pairs() {
         let (a, b) = (sinks[f], sinks[g]);
-        if a != b && marginal(a) && marginal(b) {
+        // Neighbours on one curved surface face nearly the same way; a lens's two sides do not.
+        let same_surface = faces.normal[a].dot(faces.normal[b]) > ROLLING_NEIGHBOUR_COS;
+        if a != b && marginal(a) && marginal(b) && same_surface {
             let (ra, rb) = (root(&mut family, a), root(&mut family, b));
             family[ra] = rb;
         }
@@ -299,19 +315,42 @@ impl<'a> HullFaces<'a> {
         (com + n * height, height)
     }
 
-    fn contains(&self, f: usize, p: Vec3) -> bool {
+    /// The support polygon of face `f`: the convex hull of its vertices in the face plane, in
+    /// plane coordinates (u, v) with the plane basis.
+    fn support_polygon(&self, f: usize) -> (Vec<[f32; 2]>, Vec3, Vec3) {
         let n = self.normal[f];
-        self.facets[f].iter().any(|&t| {
-            let [a, b, c] = self.corners(t);
-            let inside = |u: Vec3, v: Vec3| (v - u).cross(p - u).dot(n) >= -1e-9;
-            inside(a, b) && inside(b, c) && inside(c, a)
-        })
+        let u = n.any_orthonormal_vector();
+        let v = n.cross(u);
+        let mut points: Vec<[f32; 2]> = self.facets[f]
+            .iter()
+            .flat_map(|&t| self.corners(t))
+            .map(|p| [p.dot(u), p.dot(v)])
+            .collect();
+        (convex_hull_2d(&mut points), u, v)
+    }
+
+    /// Whether the support polygon of `f` holds `p` (a point on its plane), and the distance
+    /// from `p` to the polygon's nearest edge.
+    fn support_margin(&self, f: usize, p: Vec3) -> (bool, f32) {
+        let (polygon, u, v) = self.support_polygon(f);
+        let q = [p.dot(u), p.dot(v)];
+        let mut inside = polygon.len() >= 3;
+        let mut distance = f32::INFINITY;
+        for (i, a) in polygon.iter().enumerate() {
+            let b = polygon[(i + 1) % polygon.len()];
+            let (ab, aq) = ([b[0] - a[0], b[1] - a[1]], [q[0] - a[0], q[1] - a[1]]);
+            inside &= ab[0] * aq[1] - ab[1] * aq[0] >= 0.0;
+            let len2 = (ab[0] * ab[0] + ab[1] * ab[1]).max(f32::MIN_POSITIVE);
+            let t = ((aq[0] * ab[0] + aq[1] * ab[1]) / len2).clamp(0.0, 1.0);
+            distance = distance.min((aq[0] - t * ab[0]).hypot(aq[1] - t * ab[1]));
+        }
+        (inside, distance)
     }
 
     /// The face `f` topples onto, or `None` when it holds the centre of mass's projection.
     fn topples_to(&self, f: usize, com: Vec3) -> Option<usize> {
         let (p, _) = self.projection(f, com);
-        if self.contains(f, p) {
+        if self.support_margin(f, p).0 {
             return None;
         }
         // Leave the face through the boundary edge closest to the projection: on a convex
@@ -326,10 +365,10 @@ impl<'a> HullFaces<'a> {
     /// Smallest rotation about a support edge that brings the centre of mass over it.
     fn tipping_angle(&self, f: usize, com: Vec3) -> f32 {
         let (p, height) = self.projection(f, com);
-        self.boundary[f]
-            .iter()
-            .map(|&(a, b, _)| distance_to_segment(p, a, b).atan2(height.max(1e-9)))
-            .fold(f32::INFINITY, f32::min)
+        match self.support_margin(f, p) {
+            (true, distance) => distance.atan2(height.max(1e-9)),
+            (false, _) => 0.0,
+        }
     }
 
     /// Solid angle of face `f` seen from `com` (Van Oosterom and Strackee), steradians.
@@ -346,17 +385,37 @@ impl<'a> HullFaces<'a> {
             .sum()
     }
 
-    /// Rotates face `f`'s outward normal onto -z, puts the face on z = 0 and the centre of mass
+    /// Rotates face `f`'s outward normal onto -z, puts the lowest point on z = 0 and the centre of mass
     /// above the origin.
     fn table_from_object(&self, f: usize, com: Vec3) -> Pose3 {
         let rotation = Rot3::from_rotation_arc(self.normal[f], -Vec3::Z);
-        let on_plane = rotation * self.corners(self.facets[f][0])[0];
+        // The lowest hull vertex touches the table (a merged face is only nearly planar).
+        let lowest = self.hull.vertices().iter().map(|v| (rotation * *v).z).fold(f32::INFINITY, f32::min);
         let com_rotated = rotation * com;
-        Pose3::from_parts(
-            Vec3::new(-com_rotated.x, -com_rotated.y, -on_plane.z),
-            rotation,
-        )
+        Pose3::from_parts(Vec3::new(-com_rotated.x, -com_rotated.y, -lowest), rotation)
     }
+}
+
+/// Andrew's monotone chain: the convex hull of `points`, counter-clockwise, no repeated ends.
+fn convex_hull_2d(points: &mut [[f32; 2]]) -> Vec<[f32; 2]> {
+    points.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
+    let cross = |o: [f32; 2], a: [f32; 2], b: [f32; 2]| {
+        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    };
+    let mut hull: Vec<[f32; 2]> = Vec::with_capacity(points.len() + 1);
+    for pass in 0..2 {
+        let start = hull.len();
+        let ordered: Box<dyn Iterator<Item = &[f32; 2]>> =
+            if pass == 0 { Box::new(points.iter()) } else { Box::new(points.iter().rev()) };
+        for &p in ordered {
+            while hull.len() >= start + 2 && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0 {
+                hull.pop();
+            }
+            hull.push(p);
+        }
+        hull.pop();
+    }
+    hull
 }
 
 fn distance_to_segment(p: Vec3, a: Vec3, b: Vec3) -> f32 {
