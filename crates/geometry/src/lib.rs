@@ -3,15 +3,19 @@
 pub mod camera;
 pub mod error;
 pub mod mesh;
+pub mod objects;
 pub mod properties;
 pub mod stable_poses;
 pub mod views;
 
+pub mod pose_as_matrix;
+
 pub use camera::{Camera, Intrinsics, IntrinsicsPreset, read_tf};
 pub use error::{GeometryError, Result};
 pub use mesh::{LoadOptions, TriangleMesh, UrdfGeometryKind, load_mesh, load_mesh_with, write_obj};
+pub use objects::{Category, GeneratedObject, MarchingParams, ObjectSpec, default_object};
 /// The math types of every public API: parry's (glam 0.33 through glamx), f32, metres.
-pub use parry3d::math::{Pose3, Rot3, Vec3};
+pub use parry3d::math::{Mat3, Pose3, Rot3, Vec3};
 pub use properties::{DecompositionParams, MassFacts, Topology};
 pub use stable_poses::{StablePose, StablePoseParams, stable_poses};
 pub use views::HemisphereLayout;

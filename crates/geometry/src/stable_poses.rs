@@ -390,7 +390,12 @@ impl<'a> HullFaces<'a> {
     fn table_from_object(&self, f: usize, com: Vec3) -> Pose3 {
         let rotation = Rot3::from_rotation_arc(self.normal[f], -Vec3::Z);
         // The lowest hull vertex touches the table (a merged face is only nearly planar).
-        let lowest = self.hull.vertices().iter().map(|v| (rotation * *v).z).fold(f32::INFINITY, f32::min);
+        let lowest = self
+            .hull
+            .vertices()
+            .iter()
+            .map(|v| (rotation * *v).z)
+            .fold(f32::INFINITY, f32::min);
         let com_rotated = rotation * com;
         Pose3::from_parts(Vec3::new(-com_rotated.x, -com_rotated.y, -lowest), rotation)
     }
@@ -405,10 +410,15 @@ fn convex_hull_2d(points: &mut [[f32; 2]]) -> Vec<[f32; 2]> {
     let mut hull: Vec<[f32; 2]> = Vec::with_capacity(points.len() + 1);
     for pass in 0..2 {
         let start = hull.len();
-        let ordered: Box<dyn Iterator<Item = &[f32; 2]>> =
-            if pass == 0 { Box::new(points.iter()) } else { Box::new(points.iter().rev()) };
+        let ordered: Box<dyn Iterator<Item = &[f32; 2]>> = if pass == 0 {
+            Box::new(points.iter())
+        } else {
+            Box::new(points.iter().rev())
+        };
         for &p in ordered {
-            while hull.len() >= start + 2 && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0 {
+            while hull.len() >= start + 2
+                && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0
+            {
                 hull.pop();
             }
             hull.push(p);

@@ -13,11 +13,15 @@ fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
 }
 
 /// A 5 cm tetrahedron.
-const TETRA: &str = "v 0 0 0\nv 0.05 0 0\nv 0 0.05 0\nv 0 0 0.05\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+const TETRA: &str =
+    "v 0 0 0\nv 0.05 0 0\nv 0 0.05 0\nv 0 0 0.05\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
 
 fn assert_names_file(err: &GeometryError, path: &Path) {
     let message = err.to_string();
-    assert!(message.contains(&path.display().to_string()), "message does not name the file: {message}");
+    assert!(
+        message.contains(&path.display().to_string()),
+        "message does not name the file: {message}"
+    );
 }
 
 #[test]
@@ -33,7 +37,9 @@ fn unsupported_extension() {
     let dir = tempfile::tempdir().unwrap();
     let path = write(dir.path(), "mug.ply", "ply");
     let err = load_mesh(&path).unwrap_err();
-    assert!(matches!(err, GeometryError::UnsupportedFormat { ref extension, .. } if extension == "ply"));
+    assert!(
+        matches!(err, GeometryError::UnsupportedFormat { ref extension, .. } if extension == "ply")
+    );
     assert_names_file(&err, &path);
 }
 
@@ -42,7 +48,11 @@ fn unparsable_obj_stl_and_urdf() {
     let dir = tempfile::tempdir().unwrap();
     for (name, text, format) in [
         ("bad.obj", "v 0 zero 0\nf 1 2 3\n", "OBJ"),
-        ("bad.stl", "solid x\n facet normal 0 0 1\n  outer loop\n   vertex 0 0\n", "STL"),
+        (
+            "bad.stl",
+            "solid x\n facet normal 0 0 1\n  outer loop\n   vertex 0 0\n",
+            "STL",
+        ),
         ("bad.urdf", "<robot name='r'><link name='a'>", "URDF"),
     ] {
         let path = write(dir.path(), name, text);
@@ -67,10 +77,22 @@ fn no_triangles() {
 #[test]
 fn nan_and_infinite_vertices() {
     let dir = tempfile::tempdir().unwrap();
-    let path = write(dir.path(), "nan.obj", &TETRA.replace("v 0 0 0.05", "v 0 inf nan"));
+    let path = write(
+        dir.path(),
+        "nan.obj",
+        &TETRA.replace("v 0 0 0.05", "v 0 inf nan"),
+    );
     let err = load_mesh(&path).unwrap_err();
     assert!(
-        matches!(err, GeometryError::NonFiniteVertices { count: 1, total: 4, first: 3, .. }),
+        matches!(
+            err,
+            GeometryError::NonFiniteVertices {
+                count: 1,
+                total: 4,
+                first: 3,
+                ..
+            }
+        ),
         "{err:?}"
     );
     assert_names_file(&err, &path);
@@ -78,7 +100,9 @@ fn nan_and_infinite_vertices() {
 
 #[test]
 fn real_all_nan_mesh_from_pybullet() {
-    let Some(root) = common::shared_meshes() else { return };
+    let Some(root) = common::shared_meshes() else {
+        return;
+    };
     let obj = root.join("pybullet/random_urdfs/168/168.obj");
     let err = load_mesh(&obj).unwrap_err();
     assert!(matches!(err, GeometryError::NonFiniteVertices { count, total, .. } if count == total));
@@ -98,22 +122,41 @@ fn out_of_range_indices() {
     let path = write(dir.path(), "oob.obj", &format!("{TETRA}f 1 2 9\n"));
     let err = load_mesh(&path).unwrap_err();
     assert!(
-        matches!(err, GeometryError::IndexOutOfRange { triangle: 4, index: 9, vertex_count: 4, .. }),
+        matches!(
+            err,
+            GeometryError::IndexOutOfRange {
+                triangle: 4,
+                index: 9,
+                vertex_count: 4,
+                ..
+            }
+        ),
         "{err:?}"
     );
     assert_names_file(&err, &path);
     // In-memory meshes are checked the same way.
-    let err = mvgrasp_geometry::TriangleMesh::new(vec![Vec3::ZERO; 3], vec![[0, 1, 3]]).unwrap_err();
-    assert!(matches!(err, GeometryError::IndexOutOfRange { index: 3, .. }));
+    let err =
+        mvgrasp_geometry::TriangleMesh::new(vec![Vec3::ZERO; 3], vec![[0, 1, 3]]).unwrap_err();
+    assert!(matches!(
+        err,
+        GeometryError::IndexOutOfRange { index: 3, .. }
+    ));
 }
 
 #[test]
 fn degenerate_faces_only() {
     let dir = tempfile::tempdir().unwrap();
     // Collinear points and a repeated vertex: no triangle has area.
-    let path = write(dir.path(), "flat.obj", "v 0 0 0\nv 0.05 0 0\nv 0.1 0 0\nf 1 2 3\nf 1 1 2\n");
+    let path = write(
+        dir.path(),
+        "flat.obj",
+        "v 0 0 0\nv 0.05 0 0\nv 0.1 0 0\nf 1 2 3\nf 1 1 2\n",
+    );
     let err = load_mesh(&path).unwrap_err();
-    assert!(matches!(err, GeometryError::DegenerateOnly { triangles: 2, .. }), "{err:?}");
+    assert!(
+        matches!(err, GeometryError::DegenerateOnly { triangles: 2, .. }),
+        "{err:?}"
+    );
     assert_names_file(&err, &path);
     // A degenerate face among good ones is dropped, not fatal.
     let path = write(dir.path(), "some.obj", &format!("{TETRA}f 1 1 2\n"));
@@ -128,8 +171,10 @@ fn absurd_sizes_get_a_units_hint() {
             .lines()
             .map(|l| match l.strip_prefix("v ") {
                 Some(v) => {
-                    let xyz: Vec<String> =
-                        v.split(' ').map(|c| (c.parse::<f32>().unwrap() * factor).to_string()).collect();
+                    let xyz: Vec<String> = v
+                        .split(' ')
+                        .map(|c| (c.parse::<f32>().unwrap() * factor).to_string())
+                        .collect();
                     format!("v {}", xyz.join(" "))
                 }
                 None => l.to_string(),
@@ -137,7 +182,11 @@ fn absurd_sizes_get_a_units_hint() {
             .collect::<Vec<_>>()
             .join("\n")
     };
-    for (factor, hint) in [(1000.0, "millimetres"), (100.0, "centimetres"), (0.01, "scale")] {
+    for (factor, hint) in [
+        (1000.0, "millimetres"),
+        (100.0, "centimetres"),
+        (0.01, "scale"),
+    ] {
         let path = write(dir.path(), &format!("x{factor}.obj"), &scaled(factor));
         let err = load_mesh(&path).unwrap_err();
         assert!(matches!(err, GeometryError::AbsurdSize { .. }), "{err:?}");
@@ -146,10 +195,27 @@ fn absurd_sizes_get_a_units_hint() {
     }
     // The hint works: load the millimetre file with scale 0.001.
     let path = dir.path().join("x1000.obj");
-    let mesh = load_mesh_with(&path, &LoadOptions { scale: 0.001, ..Default::default() }).unwrap();
+    let mesh = load_mesh_with(
+        &path,
+        &LoadOptions {
+            scale: 0.001,
+            ..Default::default()
+        },
+    )
+    .unwrap();
     assert!((mesh.aabb().extents().max_element() - 0.05).abs() < 1e-6);
-    let err = load_mesh_with(&path, &LoadOptions { scale: -1.0, ..Default::default() }).unwrap_err();
-    assert!(matches!(err, GeometryError::InvalidParameter { name: "scale", .. }));
+    let err = load_mesh_with(
+        &path,
+        &LoadOptions {
+            scale: -1.0,
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
+    assert!(matches!(
+        err,
+        GeometryError::InvalidParameter { name: "scale", .. }
+    ));
 }
 
 #[test]
@@ -161,13 +227,23 @@ fn urdf_missing_mesh_no_geometry_and_two_roots() {
         r#"<robot name="r"><link name="body"><visual><geometry><mesh filename="meshes/gone.obj"/></geometry></visual></link></robot>"#,
     );
     let err = load_mesh(&missing).unwrap_err();
-    assert!(matches!(err, GeometryError::UrdfMeshMissing { ref link, .. } if link == "body"), "{err:?}");
+    assert!(
+        matches!(err, GeometryError::UrdfMeshMissing { ref link, .. } if link == "body"),
+        "{err:?}"
+    );
     assert!(err.to_string().contains("gone.obj"), "{err}");
     assert_names_file(&err, &missing);
 
-    let empty = write(dir.path(), "empty.urdf", r#"<robot name="r"><link name="body"/></robot>"#);
+    let empty = write(
+        dir.path(),
+        "empty.urdf",
+        r#"<robot name="r"><link name="body"/></robot>"#,
+    );
     let err = load_mesh(&empty).unwrap_err();
-    assert!(matches!(err, GeometryError::UrdfNoGeometry { .. }), "{err:?}");
+    assert!(
+        matches!(err, GeometryError::UrdfNoGeometry { .. }),
+        "{err:?}"
+    );
 
     let two_roots = write(
         dir.path(),
@@ -175,16 +251,24 @@ fn urdf_missing_mesh_no_geometry_and_two_roots() {
         r#"<robot name="r"><link name="a"><visual><geometry><box size="0.05 0.05 0.05"/></geometry></visual></link><link name="b"/></robot>"#,
     );
     let err = load_mesh(&two_roots).unwrap_err();
-    assert!(matches!(err, GeometryError::UrdfStructure { .. }), "{err:?}");
+    assert!(
+        matches!(err, GeometryError::UrdfStructure { .. }),
+        "{err:?}"
+    );
 }
 
 #[test]
 fn real_urdf_with_an_unsupported_missing_collision_file() {
-    let Some(root) = common::shared_meshes() else { return };
+    let Some(root) = common::shared_meshes() else {
+        return;
+    };
     let urdf = root.join("pybullet/toys/concave_box.urdf");
     let err = load_mesh(&urdf).unwrap_err();
     // Its collision element is a <cdf> naming concave_box.cdf, which exists nowhere.
-    assert!(matches!(err, GeometryError::Parse { format: "URDF", .. }), "{err:?}");
+    assert!(
+        matches!(err, GeometryError::Parse { format: "URDF", .. }),
+        "{err:?}"
+    );
     assert!(err.to_string().contains("cdf"), "{err}");
     assert_names_file(&err, &urdf);
 }
@@ -207,8 +291,16 @@ fn urdf_applies_joint_origin_and_mesh_scale() {
     let aabb = mesh.aabb();
     // Box: x in [-0.02, 0.02], z in [0, 0.02]. Tetra (10 cm after scale), yawed 90 deg, at
     // (0.1, 0, 0.05): x in [0, 0.1] maps to y, y in [0, 0.1] maps to -x.
-    assert!((aabb.mins - Vec3::new(-0.02, -0.01, 0.0)).length() < 1e-5, "{:?}", aabb.mins);
-    assert!((aabb.maxs - Vec3::new(0.1, 0.1, 0.15)).length() < 1e-5, "{:?}", aabb.maxs);
+    assert!(
+        (aabb.mins - Vec3::new(-0.02, -0.01, 0.0)).length() < 1e-5,
+        "{:?}",
+        aabb.mins
+    );
+    assert!(
+        (aabb.maxs - Vec3::new(0.1, 0.1, 0.15)).length() < 1e-5,
+        "{:?}",
+        aabb.maxs
+    );
     assert_eq!(mesh.triangles().len(), 12 + 4);
 }
 

@@ -1,1 +1,9 @@
-//! mvgrasp-grasp
+#![doc = include_str!("../README.md")]
+
+pub mod error;
+pub mod grasp;
+pub mod gripper;
+
+pub use error::{GraspError, Result};
+pub use grasp::{Grasp, ImageGrasp, PaperGrasp};
+pub use gripper::{Gripper, GripperPreset};

@@ -16,7 +16,7 @@ pub struct Camera {
     /// The pinhole model.
     pub intrinsics: Intrinsics,
     /// Maps camera-frame points to the world (serialised as a row-major 4x4 matrix).
-    #[serde(with = "pose_as_matrix")]
+    #[serde(with = "crate::pose_as_matrix")]
     pub world_from_camera: Pose3,
 }
 
@@ -160,37 +160,6 @@ pub fn read_tf(path: impl AsRef<Path>) -> Result<(String, String, Pose3)> {
         lines[1].to_string(),
         Pose3::from_parts(translation, rotation),
     ))
-}
-
-/// Serialises a pose as the row-major 4x4 homogeneous matrix robotics tools expect.
-pub(crate) mod pose_as_matrix {
-    use glam::Mat4;
-    use parry3d::math::Pose3;
-    use serde::{Deserialize, Deserializer, Serialize, Serializer, de::Error};
-
-    pub fn serialize<S: Serializer>(pose: &Pose3, serializer: S) -> Result<S::Ok, S::Error> {
-        let m = pose.to_mat4().transpose(); // glam is column-major: rows of m are columns here
-        [0, 1, 2, 3]
-            .map(|i| m.col(i).to_array())
-            .serialize(serializer)
-    }
-
-    pub fn deserialize<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Pose3, D::Error> {
-        let rows = <[[f32; 4]; 4]>::deserialize(deserializer)?;
-        let m = Mat4::from_cols_array_2d(&rows).transpose();
-        let pose = Pose3::from_mat4(m);
-        let error = (pose.to_mat4() - m)
-            .abs()
-            .to_cols_array()
-            .into_iter()
-            .fold(0.0, f32::max);
-        if !(error < 1e-3) || rows[3] != [0.0, 0.0, 0.0, 1.0] {
-            return Err(D::Error::custom(
-                "not a rigid transform (rotation + translation)",
-            ));
-        }
-        Ok(pose)
-    }
 }
 
 #[cfg(test)]

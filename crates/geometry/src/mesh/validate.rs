@@ -74,16 +74,21 @@ pub(super) fn check_size(vertices: &[Vec3], min_m: f32, max_m: f32, path: &Path)
     // Of the usual unit mistakes, suggest the one that makes the object closest to a typical
     // graspable 10 cm (in log scale) among those that make it plausible at all.
     let typical_m = 0.1f32;
-    let hint = [(0.001, "millimetres"), (0.01, "centimetres"), (1000.0, "kilometres")]
-        .into_iter()
-        .filter(|(scale, _)| (min_m..=max_m).contains(&(extent * scale)))
-        .min_by(|a, b| {
-            let off = |s: f32| (extent * s / typical_m).ln().abs();
-            off(a.0).total_cmp(&off(b.0))
-        })
-        .map_or("; set LoadOptions::scale to convert to metres".to_string(), |(scale, unit)| {
-            format!("; looks like {unit}: load with scale {scale}")
-        });
+    let hint = [
+        (0.001, "millimetres"),
+        (0.01, "centimetres"),
+        (1000.0, "kilometres"),
+    ]
+    .into_iter()
+    .filter(|(scale, _)| (min_m..=max_m).contains(&(extent * scale)))
+    .min_by(|a, b| {
+        let off = |s: f32| (extent * s / typical_m).ln().abs();
+        off(a.0).total_cmp(&off(b.0))
+    })
+    .map_or(
+        "; set LoadOptions::scale to convert to metres".to_string(),
+        |(scale, unit)| format!("; looks like {unit}: load with scale {scale}"),
+    );
     Err(GeometryError::AbsurdSize {
         extent,
         min_m,

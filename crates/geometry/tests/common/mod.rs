@@ -12,7 +12,10 @@ pub fn shared_meshes() -> Option<PathBuf> {
     if meshes.is_dir() {
         Some(meshes)
     } else {
-        eprintln!("skipped: no shared mesh data at {} (set MVGRASP_SHARED_DATA)", meshes.display());
+        eprintln!(
+            "skipped: no shared mesh data at {} (set MVGRASP_SHARED_DATA)",
+            meshes.display()
+        );
         None
     }
 }

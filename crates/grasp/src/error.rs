@@ -1,0 +1,22 @@
+//! The one error type of `mvgrasp-grasp`.
+
+/// Everything that can go wrong in `mvgrasp-grasp`.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum GraspError {
+    /// A parameter is out of its valid range.
+    #[error("{op}: {name} = {value} is invalid: {expected}")]
+    InvalidParameter {
+        /// The operation.
+        op: &'static str,
+        /// The parameter.
+        name: &'static str,
+        /// Its value, printed.
+        value: String,
+        /// What would be valid.
+        expected: &'static str,
+    },
+}
+
+/// `Result` with [`GraspError`].
+pub type Result<T, E = GraspError> = std::result::Result<T, E>;

@@ -1,0 +1,100 @@
+//! The crate layers of ARCHITECTURE.md, enforced: arrows point down only, and leaf crates stay
+//! free of what they must not know (rerun checks its layers the same way).
+
+use std::collections::BTreeSet;
+use std::path::Path;
+
+/// Workspace crates each crate may depend on, and outside crates it must not.
+const RULES: &[(&str, &str, &[&str], &[&str])] = &[
+    // (crate, manifest, allowed mvgrasp crates, forbidden outside crates)
+    ("mvgrasp-geometry", "crates/geometry/Cargo.toml", &[], &["wgpu", "pyo3", "numpy", "faer", "rapier3d", "safetensors"]),
+    ("mvgrasp-render", "crates/render/Cargo.toml", &[], &["parry3d", "rapier3d", "pyo3", "numpy", "faer", "nalgebra"]),
+    ("mvgrasp-infer", "crates/infer/Cargo.toml", &[], &["parry3d", "rapier3d", "wgpu", "pyo3", "numpy", "nalgebra"]),
+    ("mvgrasp-grasp", "crates/grasp/Cargo.toml", &["mvgrasp-geometry"], &["wgpu", "pyo3", "numpy", "faer"]),
+    (
+        "mvgrasp",
+        "Cargo.toml",
+        &["mvgrasp-geometry", "mvgrasp-render", "mvgrasp-grasp", "mvgrasp-infer"],
+        &["pyo3", "numpy"],
+    ),
+    (
+        "mvgrasp-py",
+        "py/Cargo.toml",
+        &["mvgrasp", "mvgrasp-geometry", "mvgrasp-render", "mvgrasp-grasp", "mvgrasp-infer"],
+        &[],
+    ),
+];
+
+fn dependencies(manifest: &Path) -> BTreeSet<String> {
+    let text = std::fs::read_to_string(manifest).unwrap_or_else(|e| panic!("{}: {e}", manifest.display()));
+    let doc: toml::Table = text.parse().unwrap_or_else(|e| panic!("{}: {e}", manifest.display()));
+    let mut names = BTreeSet::new();
+    // [dependencies], [build-dependencies], and target-specific ones; dev-dependencies may
+    // reach further (tests), they do not ship.
+    let mut tables = vec![doc.get("dependencies"), doc.get("build-dependencies")];
+    if let Some(targets) = doc.get("target").and_then(|t| t.as_table()) {
+        for target in targets.values() {
+            tables.push(target.get("dependencies"));
+            tables.push(target.get("build-dependencies"));
+        }
+    }
+    for table in tables.into_iter().flatten().filter_map(|t| t.as_table()) {
+        for (key, value) in table {
+            let package = value.get("package").and_then(|p| p.as_str()).unwrap_or(key);
+            names.insert(package.to_string());
+        }
+    }
+    names
+}
+
+fn check(name: &str, deps: &BTreeSet<String>, allowed: &[&str], forbidden: &[&str]) -> Vec<String> {
+    let layers: BTreeSet<&str> = RULES.iter().map(|r| r.0).collect();
+    let mut violations = Vec::new();
+    for dep in deps {
+        if layers.contains(dep.as_str()) && !allowed.contains(&dep.as_str()) {
+            violations.push(format!("{name} depends on {dep}: not a layer below it"));
+        }
+        if forbidden.contains(&dep.as_str()) {
+            violations.push(format!("{name} depends on {dep}, which it must not know"));
+        }
+    }
+    violations
+}
+
+#[test]
+fn crates_depend_only_downwards_and_leaves_stay_leaves() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let violations: Vec<String> = RULES
+        .iter()
+        .flat_map(|&(name, manifest, allowed, forbidden)| {
+            check(name, &dependencies(&root.join(manifest)), allowed, forbidden)
+        })
+        .collect();
+    assert!(violations.is_empty(), "layering violations:\n{}", violations.join("\n"));
+}
+
+#[test]
+fn every_workspace_member_has_a_rule() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let doc: toml::Table = std::fs::read_to_string(root.join("Cargo.toml")).unwrap().parse().unwrap();
+    let members = doc["workspace"]["members"].as_array().unwrap();
+    for member in members {
+        let manifest = format!("{}/Cargo.toml", member.as_str().unwrap());
+        assert!(RULES.iter().any(|r| r.1 == manifest), "{manifest} has no layering rule");
+    }
+    // The Python crate stays out of default-members: a bare `cargo test` needs no Python.
+    let defaults = doc["workspace"]["default-members"].as_array().unwrap();
+    assert!(!defaults.iter().any(|m| m.as_str() == Some("py")));
+}
+
+#[test]
+fn the_checker_catches_an_upward_arrow() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dir.path().join("Cargo.toml");
+    std::fs::write(&manifest, "[package]\nname='x'\n[dependencies]\nrender = { package = 'mvgrasp-render', path = '..' }\nwgpu = '30'\n").unwrap();
+    let deps = dependencies(&manifest);
+    assert!(deps.contains("mvgrasp-render") && deps.contains("wgpu"), "renamed packages count");
+    let (_, _, allowed, forbidden) = RULES[2]; // infer
+    let violations = check("mvgrasp-infer", &deps, allowed, forbidden);
+    assert_eq!(violations.len(), 2, "{violations:?}");
+}
