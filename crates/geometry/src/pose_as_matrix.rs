@@ -29,7 +29,7 @@ pub fn deserialize<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Pose3, 
         .to_cols_array()
         .into_iter()
         .fold(0.0, f32::max);
-    if !(error < 1e-3) || rows[3] != [0.0, 0.0, 0.0, 1.0] {
+    if error.is_nan() || error >= 1e-3 || rows[3] != [0.0, 0.0, 0.0, 1.0] {
         return Err(D::Error::custom(
             "not a rigid transform (rotation + translation)",
         ));

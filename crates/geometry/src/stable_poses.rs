@@ -104,7 +104,7 @@ pub fn stable_poses(mesh: &TriangleMesh, params: &StablePoseParams) -> Result<Ve
     }
     let solid_angle: Vec<f64> = (0..n).map(|f| faces.solid_angle(f, com)).collect();
     let total: f64 = solid_angle.iter().sum();
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return Err(GeometryError::Degenerate {
             op: "stable poses",
             detail: "the centre of mass sees no hull face".into(),

@@ -16,7 +16,6 @@ pub(super) fn read_obj(path: &Path) -> Result<TriangleMesh> {
         single_index: false,
         ignore_points: true,
         ignore_lines: true,
-        ..Default::default()
     };
     let (models, _materials) = match tobj::load_obj(path, &options) {
         Ok(loaded) => loaded,
