@@ -1,1 +1,28 @@
-//! bindings
+//! `mvgrasp._native`: the private extension module behind the `mvgrasp` Python package.
+//!
+//! This crate holds conversions (Rust types to NumPy arrays) and error mapping (Rust errors to
+//! the `mvgrasp.MvGraspError` tree) only; every algorithm lives in the Rust crates it calls.
+//!
+//! Build it with maturin (`maturin build -m py/Cargo.toml`), which sets
+//! `PYO3_BUILD_EXTENSION_MODULE` so that the module does not link `libpython`; pyo3's
+//! deprecated `extension-module` feature is therefore not used. The crate is not in the
+//! workspace's `default-members`, so a bare `cargo build` / `cargo test` needs no Python.
+
+mod errors;
+mod mesh;
+
+/// The native half of the `mvgrasp` package; import `mvgrasp`, not this module.
+#[pyo3::pymodule(name = "_native")]
+mod native {
+    use pyo3::prelude::*;
+
+    #[pymodule_export]
+    use crate::errors::{CameraError, MeshError, MvGraspError, WeightsError};
+    #[pymodule_export]
+    use crate::mesh::load_mesh;
+
+    #[pymodule_init]
+    fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {
+        m.add("__version__", env!("CARGO_PKG_VERSION"))
+    }
+}

@@ -226,3 +226,25 @@ fn smallest_axis(extents: Vec3) -> [Vec3; 1] {
         .unwrap_or(0);
     [axes[i]]
 }
+
+#[test]
+fn a_real_mug_decomposes_into_bounded_convex_parts() {
+    let Some(root) = common::shared_meshes() else {
+        return;
+    };
+    let Ok(mug) = load_mesh(root.join("pybullet/objects/mug.urdf")) else {
+        eprintln!("skipped: pybullet mug not loadable here");
+        return;
+    };
+    let params = mvgrasp_geometry::DecompositionParams::default();
+    let parts = mug.convex_decomposition(&params).unwrap();
+    assert!(
+        (2..=params.max_parts as usize).contains(&parts.len()),
+        "{} parts",
+        parts.len()
+    );
+    let volume: f32 = parts.iter().map(|p| p.signed_volume_m3()).sum();
+    let hull = mug.convex_hull().unwrap().signed_volume_m3();
+    // A mug's parts leave its inside empty: well under its hull's volume.
+    assert!(volume < 0.8 * hull, "parts {volume} vs hull {hull}");
+}

@@ -1,0 +1,35 @@
+"""Type stubs of the native module ``mvgrasp._native`` (built from py/src by maturin)."""
+
+import os
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+class MvGraspError(Exception):
+    """The base class of every error that mvgrasp raises."""
+
+class MeshError(MvGraspError):
+    """A mesh file cannot be loaded or is not a usable mesh; the message names the file."""
+
+class CameraError(MvGraspError):
+    """Camera intrinsics or extrinsics are missing or invalid."""
+
+class WeightsError(MvGraspError):
+    """A network's weights are missing, unreadable or do not match its architecture."""
+
+def load_mesh(
+    path: str | os.PathLike[str], scale: float = 1.0
+) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.uint32]]:
+    """Loads an OBJ, STL or URDF file as ``(vertices, triangles)``.
+
+    ``vertices`` is an ``(N, 3)`` float32 array in metres (file coordinates times ``scale``),
+    ``triangles`` an ``(M, 3)`` uint32 array of vertex indices. The GIL is released while
+    loading.
+
+    Raises:
+        MeshError: the file is missing, unparsable, has NaN/inf vertices, no usable triangles
+            or an implausible size (largest extent outside 5 mm .. 2 m after scaling).
+        ValueError: ``scale`` is not a finite number > 0.
+    """

@@ -1,0 +1,242 @@
+"""Typed experiment configs, one TOML file per experiment.
+
+Every config is a frozen dataclass whose fields carry their unit in the name where it is not
+obvious. :func:`load_config` reads a TOML file and checks it completely before a run starts:
+unknown keys (typos), missing keys, wrong types and out-of-range values all raise
+:class:`ConfigError`, a ``ValueError`` whose message names the file and the dotted key, e.g.::
+
+    configs/example.toml: train.batch_size: expected an integer, got str '64'
+
+Conversions are strict: an integer field rejects ``true`` and ``10.5``; a float field accepts an
+integer (``learning_rate = 1``) and rejects NaN and infinity; a path is resolved against the
+folder of the config file that names it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import math
+import sys
+import typing
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, TypeVar
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # Python 3.10: the same parser, packaged separately.
+    import tomli as tomllib
+
+__all__ = [
+    "ConfigError",
+    "DataConfig",
+    "ExperimentConfig",
+    "TrainConfig",
+    "load_config",
+    "parse_config",
+]
+
+T = TypeVar("T")
+
+
+class ConfigError(ValueError):
+    """A config is unreadable or has an unknown, missing, mistyped or out-of-range key.
+
+    Attributes:
+        source: the file (or ``"<TrainConfig>"``-style name for a config built in code).
+        key: the dotted key at fault (``"train.batch_size"``), or ``None`` for the whole file.
+        reason: what is wrong, without the file and key.
+    """
+
+    def __init__(self, source: str, key: str | None, reason: str) -> None:
+        self.source = source
+        self.key = key
+        self.reason = reason
+        where = f"{source}: {key}" if key else source
+        super().__init__(f"{where}: {reason}")
+
+
+# A range check: (predicate, what a valid value is).
+_Check = tuple[Callable[[Any], bool], str]
+
+
+def _checked(check: _Check, **kwargs: Any) -> Any:
+    """A dataclass field whose values must pass ``check``."""
+    return field(metadata={"check": check}, **kwargs)
+
+
+_AT_LEAST_ONE: _Check = (lambda v: v >= 1, ">= 1")
+_NON_NEGATIVE: _Check = (lambda v: v >= 0, ">= 0")
+_POSITIVE: _Check = (lambda v: v > 0, "> 0")
+_FRACTION: _Check = (lambda v: 0 <= v < 1, "in [0, 1)")
+_NOT_EMPTY: _Check = (lambda v: len(v) > 0, "not empty")
+
+
+class _Validated:
+    """Checks types and ranges of every field when a config is built in code."""
+
+    def __post_init__(self) -> None:
+        source = f"<{type(self).__name__}>"
+        hints = typing.get_type_hints(type(self))
+        for f in dataclasses.fields(self):  # type: ignore[arg-type]
+            value = _convert(hints[f.name], getattr(self, f.name), source, f.name, None)
+            _check_range(f, value, source, f.name)
+            # Store the converted value (int -> float, str -> Path) in the frozen instance.
+            object.__setattr__(self, f.name, value)
+
+
+@dataclass(frozen=True)
+class DataConfig(_Validated):
+    """Where the training data is and how it is split."""
+
+    dataset_dir: Path
+    """The dataset folder; relative paths are relative to the config file's folder."""
+    val_fraction: float = _checked(_FRACTION)
+    """The fraction of objects held out for validation (split by object, never by image)."""
+
+
+@dataclass(frozen=True)
+class TrainConfig(_Validated):
+    """The optimisation schedule."""
+
+    epochs: int = _checked(_AT_LEAST_ONE)
+    """Full passes over the training split."""
+    batch_size: int = _checked(_AT_LEAST_ONE)
+    """Samples per optimiser step."""
+    learning_rate: float = _checked(_POSITIVE)
+    """The optimiser's initial step size."""
+    weight_decay: float = _checked(_NON_NEGATIVE, default=0.0)
+    """L2 penalty on the weights."""
+
+
+@dataclass(frozen=True)
+class ExperimentConfig(_Validated):
+    """One training run: everything needed to reproduce it."""
+
+    name: str = _checked(_NOT_EMPTY)
+    """A short identifier, used for the output folder."""
+    seed: int = _checked(_NON_NEGATIVE)
+    """Seeds every random choice (split, shuffling, initialisation, augmentation)."""
+    data: DataConfig
+    train: TrainConfig
+
+
+def load_config(path: str | Path, cls: type[T] = ExperimentConfig) -> T:  # type: ignore[assignment]
+    """Reads a TOML file as a ``cls`` (an :class:`ExperimentConfig` unless told otherwise).
+
+    Raises:
+        ConfigError: the file is missing or not TOML, or a key is unknown, missing, of the
+            wrong type or out of range; the message names the file and the key.
+    """
+    path = Path(path)
+    source = str(path)
+    try:
+        with path.open("rb") as file:
+            data = tomllib.load(file)
+    except FileNotFoundError:
+        raise ConfigError(source, None, "no such file") from None
+    except OSError as error:
+        raise ConfigError(source, None, f"cannot read: {error.strerror}") from error
+    except tomllib.TOMLDecodeError as error:
+        raise ConfigError(source, None, f"not valid TOML: {error}") from error
+    return parse_config(data, cls, source=source, base_dir=path.parent.resolve())
+
+
+def parse_config(
+    data: Mapping[str, Any],
+    cls: type[T] = ExperimentConfig,  # type: ignore[assignment]
+    *,
+    source: str = "<dict>",
+    base_dir: Path | None = None,
+) -> T:
+    """Builds a ``cls`` from a mapping (a parsed TOML document), checking every key.
+
+    ``source`` names the origin in error messages; relative paths are resolved against
+    ``base_dir`` (left relative when it is ``None``).
+    """
+    return _parse_dataclass(cls, data, source, "", base_dir)
+
+
+def _parse_dataclass(cls: type[T], data: Any, source: str, prefix: str, base_dir: Path | None) -> T:
+    if not isinstance(data, Mapping):
+        key = prefix.rstrip(".") or None
+        raise ConfigError(source, key, f"expected a table, got {_describe(data)}")
+    fields = {f.name: f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
+    hints = typing.get_type_hints(cls)
+
+    unknown = sorted(set(data) - set(fields))
+    if unknown:
+        key = unknown[0]
+        close = difflib.get_close_matches(key, fields, n=1)
+        hint = f"did you mean {close[0]!r}? " if close else ""
+        raise ConfigError(
+            source,
+            prefix + key,
+            f"unknown key ({hint}{cls.__name__} takes: {', '.join(sorted(fields))})",
+        )
+
+    values: dict[str, Any] = {}
+    for name, f in fields.items():
+        key = prefix + name
+        if name not in data:
+            if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+                raise ConfigError(source, key, "missing (required)")
+            continue
+        raw = data[name]
+        hint = hints[name]
+        if dataclasses.is_dataclass(hint):
+            values[name] = _parse_dataclass(hint, raw, source, key + ".", base_dir)
+        else:
+            value = _convert(hint, raw, source, key, base_dir)
+            _check_range(f, value, source, key)
+            values[name] = value
+    return cls(**values)
+
+
+def _convert(hint: Any, raw: Any, source: str, key: str, base_dir: Path | None) -> Any:
+    """Checks ``raw`` against the field type ``hint``; converts int to float and str to Path."""
+    if dataclasses.is_dataclass(hint):
+        if not isinstance(raw, hint):
+            raise ConfigError(source, key, f"expected a {hint.__name__}, got {_describe(raw)}")
+        return raw
+    if hint is bool:
+        if not isinstance(raw, bool):
+            raise ConfigError(source, key, f"expected true or false, got {_describe(raw)}")
+        return raw
+    if hint is int:
+        if isinstance(raw, bool) or not isinstance(raw, int):
+            raise ConfigError(source, key, f"expected an integer, got {_describe(raw)}")
+        return raw
+    if hint is float:
+        if isinstance(raw, bool) or not isinstance(raw, (int, float)):
+            raise ConfigError(source, key, f"expected a number, got {_describe(raw)}")
+        if not math.isfinite(raw):
+            raise ConfigError(source, key, f"expected a finite number, got {raw}")
+        return float(raw)
+    if hint is str:
+        if not isinstance(raw, str):
+            raise ConfigError(source, key, f"expected a string, got {_describe(raw)}")
+        return raw
+    if hint is Path:
+        if not isinstance(raw, (str, Path)):
+            raise ConfigError(source, key, f"expected a path string, got {_describe(raw)}")
+        path = Path(raw)
+        if base_dir is not None and not path.is_absolute():
+            path = (base_dir / path).resolve()
+        return path
+    raise TypeError(f"config field {key} has unsupported type {hint!r}")
+
+
+def _check_range(f: dataclasses.Field[Any], value: Any, source: str, key: str) -> None:
+    check: _Check | None = f.metadata.get("check")
+    if check is not None and not check[0](value):
+        raise ConfigError(source, key, f"must be {check[1]}, got {value!r}")
+
+
+def _describe(value: Any) -> str:
+    text = repr(value)
+    if len(text) > 40:
+        text = text[:37] + "..."
+    return f"{type(value).__name__} {text}"
