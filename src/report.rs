@@ -88,11 +88,16 @@ impl ObjectReport {
         let facts = mesh.mass_facts(params.density_kg_m3)?;
         let poses = stable_poses(mesh, &params.stable_poses)?;
         // Look at the centre of mass of the object resting in its most likely pose.
-        let target = poses.first().map_or(facts.center_of_mass, |p: &StablePose| {
-            p.table_from_object.transform_point(facts.center_of_mass)
-        });
-        let training_views =
-            HemisphereLayout::paper_training().cameras(params.intrinsics, target, params.views_seed)?;
+        let target = poses
+            .first()
+            .map_or(facts.center_of_mass, |p: &StablePose| {
+                p.table_from_object.transform_point(facts.center_of_mass)
+            });
+        let training_views = HemisphereLayout::paper_training().cameras(
+            params.intrinsics,
+            target,
+            params.views_seed,
+        )?;
         let test_views = HemisphereLayout::paper_test().cameras(
             params.intrinsics,
             target,
@@ -130,10 +135,18 @@ impl ObjectReport {
             "{}: {} triangles, {}, {x:.1} x {y:.1} x {z:.1} cm, {:.1} cm^3, {:.0} g{}\n",
             self.name,
             self.triangles,
-            if self.watertight { "watertight" } else { "NOT watertight" },
+            if self.watertight {
+                "watertight"
+            } else {
+                "NOT watertight"
+            },
             self.volume_m3 * 1e6,
             self.mass_kg * 1e3,
-            if self.mass_from_convex_hull { " (of its convex hull)" } else { "" },
+            if self.mass_from_convex_hull {
+                " (of its convex hull)"
+            } else {
+                ""
+            },
         );
         out += &format!("stable poses ({}):\n", self.stable_poses.len());
         out += "   #  probability  tipping  face normal (object frame)  \n";
@@ -143,7 +156,11 @@ impl ObjectReport {
                 "  {i:>2}  {:>11.3}  {:>5.1} deg  ({nx:+.2}, {ny:+.2}, {nz:+.2})  {}\n",
                 p.probability,
                 p.tipping_angle_deg,
-                if p.marginal { "marginal: rolls or topples, not planned" } else { "stable" },
+                if p.marginal {
+                    "marginal: rolls or topples, not planned"
+                } else {
+                    "stable"
+                },
             );
         }
         let describe = |views: &[Camera]| {
@@ -154,11 +171,19 @@ impl ObjectReport {
             let lo = elevations.iter().copied().fold(f32::INFINITY, f32::min);
             let hi = elevations.iter().copied().fold(f32::NEG_INFINITY, f32::max);
             let target = Vec3::from_array(self.view_target_m);
-            let radius = views.first().map_or(0.0, |c| (c.position() - target).length());
-            format!("{} views, {radius:.2} m away, elevation {lo:.0} to {hi:.0} deg", views.len())
+            let radius = views
+                .first()
+                .map_or(0.0, |c| (c.position() - target).length());
+            format!(
+                "{} views, {radius:.2} m away, elevation {lo:.0} to {hi:.0} deg",
+                views.len()
+            )
         };
         out += &format!("training views: {}\n", describe(&self.training_views));
-        out += &format!("test views:     {} (the first is top-down)\n", describe(&self.test_views));
+        out += &format!(
+            "test views:     {} (the first is top-down)\n",
+            describe(&self.test_views)
+        );
         out
     }
 }

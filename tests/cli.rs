@@ -3,16 +3,26 @@
 use std::process::Command;
 
 fn plan(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_plan")).args(args).output().unwrap()
+    Command::new(env!("CARGO_BIN_EXE_plan"))
+        .args(args)
+        .output()
+        .unwrap()
 }
 
 #[test]
 fn plan_with_no_arguments_describes_the_built_in_mug() {
     let out = plan(&[]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(text.starts_with("mug_000 (built-in, seed 0)"), "{text}");
-    assert!(text.contains("watertight") && !text.contains("NOT watertight"), "{text}");
+    assert!(
+        text.contains("watertight") && !text.contains("NOT watertight"),
+        "{text}"
+    );
     assert!(text.contains("training views: 20 views"), "{text}");
     assert!(text.contains("test views:     10 views"), "{text}");
     assert!(text.contains("stable"), "{text}");
@@ -29,7 +39,10 @@ fn plan_json_is_complete_and_deterministic() {
     assert_eq!(report["test_views"].as_array().unwrap().len(), 10);
     let poses = report["stable_poses"].as_array().unwrap();
     assert!(poses.len() >= 2, "a box rests on several faces");
-    let sum: f64 = poses.iter().map(|p| p["probability"].as_f64().unwrap()).sum();
+    let sum: f64 = poses
+        .iter()
+        .map(|p| p["probability"].as_f64().unwrap())
+        .sum();
     assert!(sum > 0.9 && sum <= 1.0001, "{sum}");
 }
 
@@ -44,7 +57,10 @@ fn plan_reports_bad_input_in_one_line_and_exits_2() {
         let out = plan(args);
         assert_eq!(out.status.code(), Some(2), "{args:?}");
         let err = String::from_utf8(out.stderr).unwrap();
-        assert!(err.starts_with("error: ") && err.trim_end().lines().count() == 1, "{args:?}: {err}");
+        assert!(
+            err.starts_with("error: ") && err.trim_end().lines().count() == 1,
+            "{args:?}: {err}"
+        );
     }
 }
 
@@ -57,7 +73,11 @@ fn plan_describes_a_real_mesh_when_the_shared_data_is_there() {
         return;
     }
     let out = plan(&["--mesh", mesh.to_str().unwrap()]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(text.contains("marginal"), "the can's side rolls: {text}");
 }

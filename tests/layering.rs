@@ -7,27 +7,61 @@ use std::path::Path;
 /// Workspace crates each crate may depend on, and outside crates it must not.
 const RULES: &[(&str, &str, &[&str], &[&str])] = &[
     // (crate, manifest, allowed mvgrasp crates, forbidden outside crates)
-    ("mvgrasp-geometry", "crates/geometry/Cargo.toml", &[], &["wgpu", "pyo3", "numpy", "faer", "rapier3d", "safetensors"]),
-    ("mvgrasp-render", "crates/render/Cargo.toml", &[], &["parry3d", "rapier3d", "pyo3", "numpy", "faer", "nalgebra"]),
-    ("mvgrasp-infer", "crates/infer/Cargo.toml", &[], &["parry3d", "rapier3d", "wgpu", "pyo3", "numpy", "nalgebra"]),
-    ("mvgrasp-grasp", "crates/grasp/Cargo.toml", &["mvgrasp-geometry"], &["wgpu", "pyo3", "numpy", "faer"]),
+    (
+        "mvgrasp-geometry",
+        "crates/geometry/Cargo.toml",
+        &[],
+        &["wgpu", "pyo3", "numpy", "faer", "rapier3d", "safetensors"],
+    ),
+    (
+        "mvgrasp-render",
+        "crates/render/Cargo.toml",
+        &[],
+        &["parry3d", "rapier3d", "pyo3", "numpy", "faer", "nalgebra"],
+    ),
+    (
+        "mvgrasp-infer",
+        "crates/infer/Cargo.toml",
+        &[],
+        &["parry3d", "rapier3d", "wgpu", "pyo3", "numpy", "nalgebra"],
+    ),
+    (
+        "mvgrasp-grasp",
+        "crates/grasp/Cargo.toml",
+        &["mvgrasp-geometry"],
+        &["wgpu", "pyo3", "numpy", "faer"],
+    ),
     (
         "mvgrasp",
         "Cargo.toml",
-        &["mvgrasp-geometry", "mvgrasp-render", "mvgrasp-grasp", "mvgrasp-infer"],
+        &[
+            "mvgrasp-geometry",
+            "mvgrasp-render",
+            "mvgrasp-grasp",
+            "mvgrasp-infer",
+        ],
         &["pyo3", "numpy"],
     ),
     (
         "mvgrasp-py",
         "py/Cargo.toml",
-        &["mvgrasp", "mvgrasp-geometry", "mvgrasp-render", "mvgrasp-grasp", "mvgrasp-infer"],
+        &[
+            "mvgrasp",
+            "mvgrasp-geometry",
+            "mvgrasp-render",
+            "mvgrasp-grasp",
+            "mvgrasp-infer",
+        ],
         &[],
     ),
 ];
 
 fn dependencies(manifest: &Path) -> BTreeSet<String> {
-    let text = std::fs::read_to_string(manifest).unwrap_or_else(|e| panic!("{}: {e}", manifest.display()));
-    let doc: toml::Table = text.parse().unwrap_or_else(|e| panic!("{}: {e}", manifest.display()));
+    let text =
+        std::fs::read_to_string(manifest).unwrap_or_else(|e| panic!("{}: {e}", manifest.display()));
+    let doc: toml::Table = text
+        .parse()
+        .unwrap_or_else(|e| panic!("{}: {e}", manifest.display()));
     let mut names = BTreeSet::new();
     // [dependencies], [build-dependencies], and target-specific ones; dev-dependencies may
     // reach further (tests), they do not ship.
@@ -67,20 +101,35 @@ fn crates_depend_only_downwards_and_leaves_stay_leaves() {
     let violations: Vec<String> = RULES
         .iter()
         .flat_map(|&(name, manifest, allowed, forbidden)| {
-            check(name, &dependencies(&root.join(manifest)), allowed, forbidden)
+            check(
+                name,
+                &dependencies(&root.join(manifest)),
+                allowed,
+                forbidden,
+            )
         })
         .collect();
-    assert!(violations.is_empty(), "layering violations:\n{}", violations.join("\n"));
+    assert!(
+        violations.is_empty(),
+        "layering violations:\n{}",
+        violations.join("\n")
+    );
 }
 
 #[test]
 fn every_workspace_member_has_a_rule() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let doc: toml::Table = std::fs::read_to_string(root.join("Cargo.toml")).unwrap().parse().unwrap();
+    let doc: toml::Table = std::fs::read_to_string(root.join("Cargo.toml"))
+        .unwrap()
+        .parse()
+        .unwrap();
     let members = doc["workspace"]["members"].as_array().unwrap();
     for member in members {
         let manifest = format!("{}/Cargo.toml", member.as_str().unwrap());
-        assert!(RULES.iter().any(|r| r.1 == manifest), "{manifest} has no layering rule");
+        assert!(
+            RULES.iter().any(|r| r.1 == manifest),
+            "{manifest} has no layering rule"
+        );
     }
     // The Python crate stays out of default-members: a bare `cargo test` needs no Python.
     let defaults = doc["workspace"]["default-members"].as_array().unwrap();
@@ -93,7 +142,10 @@ fn the_checker_catches_an_upward_arrow() {
     let manifest = dir.path().join("Cargo.toml");
     std::fs::write(&manifest, "[package]\nname='x'\n[dependencies]\nrender = { package = 'mvgrasp-render', path = '..' }\nwgpu = '30'\n").unwrap();
     let deps = dependencies(&manifest);
-    assert!(deps.contains("mvgrasp-render") && deps.contains("wgpu"), "renamed packages count");
+    assert!(
+        deps.contains("mvgrasp-render") && deps.contains("wgpu"),
+        "renamed packages count"
+    );
     let (_, _, allowed, forbidden) = RULES[2]; // infer
     let violations = check("mvgrasp-infer", &deps, allowed, forbidden);
     assert_eq!(violations.len(), 2, "{violations:?}");

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 
 use clap::Parser;
 use mvgrasp::geometry::objects::{Category, generate};
-use mvgrasp::geometry::{IntrinsicsPreset, Intrinsics, LoadOptions, load_mesh_with};
+use mvgrasp::geometry::{Intrinsics, IntrinsicsPreset, LoadOptions, load_mesh_with};
 use mvgrasp::{ObjectReport, ReportParams};
 
 /// Plan for an object: today, describe it (mesh facts, stable poses, hemisphere views).
@@ -52,15 +52,26 @@ fn run(args: &Args) -> Result<(), String> {
     let preset: IntrinsicsPreset = args.camera.parse().map_err(|e| format!("--camera: {e}"))?;
     let (name, mesh) = match &args.mesh {
         Some(path) => {
-            let options = LoadOptions { scale: args.scale, ..Default::default() };
+            let options = LoadOptions {
+                scale: args.scale,
+                ..Default::default()
+            };
             let mesh = load_mesh_with(path, &options).map_err(|e| e.to_string())?;
-            let name = path.file_stem().map_or("mesh".into(), |s| s.to_string_lossy().into_owned());
+            let name = path
+                .file_stem()
+                .map_or("mesh".into(), |s| s.to_string_lossy().into_owned());
             (name, mesh)
         }
         None => {
-            let category: Category = args.category.parse().map_err(|e| format!("--category: {e}"))?;
+            let category: Category = args
+                .category
+                .parse()
+                .map_err(|e| format!("--category: {e}"))?;
             let object = generate(category, args.index, args.seed).map_err(|e| e.to_string())?;
-            (format!("{} (built-in, seed {})", object.name, args.seed), object.mesh)
+            (
+                format!("{} (built-in, seed {})", object.name, args.seed),
+                object.mesh,
+            )
         }
     };
     let params = ReportParams {
