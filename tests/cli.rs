@@ -1,5 +1,7 @@
 //! The command-line tools as a user runs them.
 
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // tests may fail loudly
+
 use std::process::Command;
 
 fn plan(args: &[&str]) -> std::process::Output {

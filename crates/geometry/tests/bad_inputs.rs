@@ -1,5 +1,7 @@
 //! Every bad input the loaders know gets its own error kind, and a message that names the file.
 
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // tests may fail loudly
+
 mod common;
 
 use std::path::{Path, PathBuf};

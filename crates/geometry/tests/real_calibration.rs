@@ -1,6 +1,8 @@
 //! The real Berkeley calibration files in `../shared/data/real_depth/gqcnn/data/calib`, and a
 //! real depth image back-projected with them.
 
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // tests may fail loudly
+
 mod common;
 
 use mvgrasp_geometry::{Intrinsics, IntrinsicsPreset, Vec3, read_tf};

@@ -1,6 +1,8 @@
 //! Real meshes from `../shared/data/meshes`: sensible volumes, extents and stable poses.
 //! Each test skips with a message when the data is absent.
 
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // tests may fail loudly
+
 mod common;
 
 use mvgrasp_geometry::{StablePoseParams, Vec3, load_mesh, stable_poses};

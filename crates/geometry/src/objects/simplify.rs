@@ -12,6 +12,9 @@ use std::collections::BinaryHeap;
 use glam::DVec3;
 use parry3d::math::Vec3;
 
+/// Candidate edge collapses, cheapest first: (cost bits, u, v, version of u, version of v).
+type EdgeHeap = BinaryHeap<Reverse<(u64, u32, u32, u32, u32)>>;
+
 /// A symmetric 4x4 quadric, upper triangle row by row.
 #[derive(Clone, Copy, Default)]
 struct Quadric([f64; 10]);
@@ -42,7 +45,10 @@ impl Quadric {
     fn error(&self, p: DVec3) -> f64 {
         let q = &self.0;
         let (x, y, z) = (p.x, p.y, p.z);
-        let e = q[0] * x * x + 2.0 * q[1] * x * y + 2.0 * q[2] * x * z + 2.0 * q[3] * x
+        let e = q[0] * x * x
+            + 2.0 * q[1] * x * y
+            + 2.0 * q[2] * x * z
+            + 2.0 * q[3] * x
             + q[4] * y * y
             + 2.0 * q[5] * y * z
             + 2.0 * q[6] * y
@@ -89,7 +95,7 @@ pub(crate) fn simplify(
     let mut m = Mesh::new(vertices, triangles);
     let max_cost = f64::from(limits.tolerance_m).powi(2);
     let max_edge2 = f64::from(limits.max_edge_m).powi(2);
-    let mut heap: BinaryHeap<Reverse<(u64, u32, u32, u32, u32)>> = BinaryHeap::new();
+    let mut heap: EdgeHeap = BinaryHeap::new();
     for t in triangles {
         for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
             if a < b {
@@ -99,7 +105,10 @@ pub(crate) fn simplify(
     }
     while let Some(Reverse((cost_bits, u, v, ver_u, ver_v))) = heap.pop() {
         let (ui, vi) = (u as usize, v as usize);
-        if !m.vert_alive[ui] || !m.vert_alive[vi] || m.version[ui] != ver_u || m.version[vi] != ver_v
+        if !m.vert_alive[ui]
+            || !m.vert_alive[vi]
+            || m.version[ui] != ver_u
+            || m.version[vi] != ver_v
         {
             continue;
         }
@@ -149,10 +158,13 @@ impl Mesh {
         [0.5 * (pu + pv), pu, pv]
             .into_iter()
             .map(|p| (p, q.error(p)))
-            .fold((pu, f64::INFINITY), |best, c| if c.1 < best.1 { c } else { best })
+            .fold(
+                (pu, f64::INFINITY),
+                |best, c| if c.1 < best.1 { c } else { best },
+            )
     }
 
-    fn push_edge(&self, heap: &mut BinaryHeap<Reverse<(u64, u32, u32, u32, u32)>>, u: u32, v: u32) {
+    fn push_edge(&self, heap: &mut EdgeHeap, u: u32, v: u32) {
         let (_, cost) = self.best_position(u, v);
         let ver = |k: u32| self.version[k as usize];
         heap.push(Reverse((cost.to_bits(), u, v, ver(u), ver(v))));
@@ -200,12 +212,17 @@ impl Mesh {
                     continue;
                 }
                 let old = tri.map(|k| self.pos[k as usize]);
-                let new = tri.map(|k| if k == u || k == v { p } else { self.pos[k as usize] });
+                let new = tri.map(|k| {
+                    if k == u || k == v {
+                        p
+                    } else {
+                        self.pos[k as usize]
+                    }
+                });
                 let n_old = (old[1] - old[0]).cross(old[2] - old[0]);
                 let n_new = (new[1] - new[0]).cross(new[2] - new[0]);
                 let (l_old, l_new) = (n_old.length(), n_new.length());
-                if l_new < MIN_DOUBLE_AREA_M2 || n_old.dot(n_new) < MIN_NORMAL_COS * l_old * l_new
-                {
+                if l_new < MIN_DOUBLE_AREA_M2 || n_old.dot(n_new) < MIN_NORMAL_COS * l_old * l_new {
                     return false;
                 }
                 if (0..3).any(|i| (new[i] - new[(i + 1) % 3]).length_squared() > max_edge2) {
