@@ -83,3 +83,55 @@ fn plan_describes_a_real_mesh_when_the_shared_data_is_there() {
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(text.contains("marginal"), "the can's side rolls: {text}");
 }
+
+#[test]
+fn objects_writes_meshes_and_a_manifest_the_same_bytes_twice() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |out: &std::path::Path| {
+        let status = Command::new(env!("CARGO_BIN_EXE_objects"))
+            .args([
+                "--per-category",
+                "1",
+                "--seed",
+                "3",
+                "--categories",
+                "can,box",
+                "--cell-mm",
+                "4",
+            ])
+            .arg("--out")
+            .arg(out)
+            .output()
+            .unwrap();
+        assert!(
+            status.status.success(),
+            "{}",
+            String::from_utf8_lossy(&status.stderr)
+        );
+    };
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    run(&a);
+    run(&b);
+    let manifest: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(a.join("manifest.json")).unwrap()).unwrap();
+    let objects = manifest["objects"].as_array().unwrap();
+    assert_eq!(objects.len(), 2);
+    for entry in objects {
+        let file = entry["file"].as_str().unwrap();
+        let mesh = mvgrasp::geometry::load_mesh(a.join(file)).unwrap();
+        assert!(mesh.is_watertight(), "{file}");
+        assert_eq!(
+            mesh.triangles().len() as u64,
+            entry["triangles"].as_u64().unwrap()
+        );
+        assert_eq!(
+            std::fs::read(a.join(file)).unwrap(),
+            std::fs::read(b.join(file)).unwrap()
+        );
+    }
+    let bad = Command::new(env!("CARGO_BIN_EXE_objects"))
+        .args(["--out", "/proc/forbidden", "--per-category", "1"])
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+}
