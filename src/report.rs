@@ -149,7 +149,7 @@ impl ObjectReport {
             },
         );
         out += &format!("stable poses ({}):\n", self.stable_poses.len());
-        out += "   #  probability  tipping  face normal (object frame)  \n";
+        out += "   #  probability  tipping  face normal (object frame)\n";
         for (i, p) in self.stable_poses.iter().enumerate() {
             let [nx, ny, nz] = p.face_normal;
             out += &format!(
