@@ -1,7 +1,22 @@
 #![doc = include_str!("../README.md")]
 
+pub mod adapter;
+pub mod camera;
+pub mod colors;
 pub mod depth8;
 pub mod error;
+pub mod frame;
+pub mod mesh;
+mod pipeline;
+mod readback;
+pub mod renderer;
+mod targets;
 
+pub use adapter::{BACKEND_ENV, Backend};
+pub use camera::{IDENTITY, Intrinsics, View, clip_from_camera, project};
+pub use colors::random_colors;
 pub use depth8::depth_to_u8;
-pub use error::{RenderError, Result};
+pub use error::{INSTALL_HINT, RenderError, Result};
+pub use frame::Frame;
+pub use mesh::{Colors, MeshInput};
+pub use renderer::{Renderer, Scene};

@@ -1,0 +1,98 @@
+//! The one render pipeline: `shader.wgsl`, the vertex layout of `mesh.rs`, a per-view uniform
+//! block bound with a dynamic offset, two colour targets (RGB + id, depth z) and a z-buffer.
+
+use std::num::NonZeroU64;
+
+use crate::mesh::VERTEX_BYTES;
+use crate::targets::{COLOR_FORMAT, DEPTH_OUT_FORMAT, ZBUFFER_FORMAT};
+
+/// Bytes of the per-view uniform block: two 4x4 f32 matrices.
+pub(crate) const VIEW_UNIFORM_BYTES: u64 = 128;
+
+/// The compiled pipeline and the layout of its per-view bind group.
+pub(crate) struct Pipeline {
+    pub pipeline: wgpu::RenderPipeline,
+    pub view_layout: wgpu::BindGroupLayout,
+}
+
+const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 4] = wgpu::vertex_attr_array![
+    0 => Float32x3, // position, world
+    1 => Float32x3, // face normal, world
+    2 => Unorm8x4,  // colour, alpha unused
+    3 => Uint32,    // instance id
+];
+
+impl Pipeline {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("mvgrasp-render shader"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("shader.wgsl").into()),
+        });
+        let view_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("mvgrasp-render view uniforms"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: true,
+                    min_binding_size: NonZeroU64::new(VIEW_UNIFORM_BYTES),
+                },
+                count: None,
+            }],
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("mvgrasp-render layout"),
+            bind_group_layouts: &[Some(&view_layout)],
+            immediate_size: 0,
+        });
+        let replace = |format| {
+            Some(wgpu::ColorTargetState {
+                format,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })
+        };
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("mvgrasp-render pipeline"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &shader,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: VERTEX_BYTES as u64,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &VERTEX_ATTRIBUTES,
+                })],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                // Meshes come with any winding: draw both sides.
+                cull_mode: None,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: ZBUFFER_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            // One sample: depth and mask must not blend across edges.
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &shader,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[replace(COLOR_FORMAT), replace(DEPTH_OUT_FORMAT)],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        Self {
+            pipeline,
+            view_layout,
+        }
+    }
+}
