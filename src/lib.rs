@@ -5,6 +5,8 @@
 //! Today the pipeline stops at describing an object for planning: its mesh facts, the poses it
 //! rests in, and the cameras that will look at it.
 
+pub mod convert;
+pub mod dataset;
 pub mod error;
 pub mod report;
 

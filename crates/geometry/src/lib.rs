@@ -5,6 +5,7 @@ pub mod error;
 pub mod mesh;
 pub mod objects;
 pub mod properties;
+pub mod raycast;
 pub mod stable_poses;
 pub mod views;
 
@@ -17,5 +18,6 @@ pub use objects::{Category, GeneratedObject, MarchingParams, ObjectSpec, default
 /// The math types of every public API: parry's (glam 0.33 through glamx), f32, metres.
 pub use parry3d::math::{Mat3, Pose3, Rot3, Vec3};
 pub use properties::{DecompositionParams, MassFacts, Topology};
+pub use raycast::{RayCaster, RayHit};
 pub use stable_poses::{StablePose, StablePoseParams, stable_poses};
 pub use views::HemisphereLayout;

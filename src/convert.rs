@@ -1,0 +1,58 @@
+//! The one place where geometry's types become the renderer's plain arrays.
+
+use mvgrasp_geometry::{Camera, Intrinsics, Pose3};
+use mvgrasp_render::{Intrinsics as RenderIntrinsics, View};
+
+/// A pose as the row-major 4x4 matrix the renderer takes.
+pub fn row_major(pose: &Pose3) -> [[f32; 4]; 4] {
+    // glam is column-major: the columns of the transpose are the rows.
+    let m = pose.to_mat4().transpose();
+    [0, 1, 2, 3].map(|i| m.col(i).to_array())
+}
+
+/// The renderer's copy of the intrinsics (same fields).
+pub fn render_intrinsics(k: &Intrinsics) -> RenderIntrinsics {
+    RenderIntrinsics {
+        fx: k.fx,
+        fy: k.fy,
+        cx: k.cx,
+        cy: k.cy,
+        width: k.width,
+        height: k.height,
+        z_near_m: k.z_near_m,
+        z_far_m: k.z_far_m,
+    }
+}
+
+/// A posed camera as a render view.
+pub fn render_view(camera: &Camera) -> View {
+    View {
+        intrinsics: render_intrinsics(&camera.intrinsics),
+        camera_from_world: row_major(&camera.camera_from_world()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mvgrasp_geometry::Vec3;
+
+    #[test]
+    fn render_views_project_like_geometry_cameras() {
+        let camera = Camera::look_at(
+            Intrinsics::phoxi_s(),
+            Vec3::new(0.3, -0.2, 0.4),
+            Vec3::new(0.0, 0.0, 0.05),
+            Vec3::Z,
+        )
+        .unwrap();
+        let view = render_view(&camera);
+        let p = Vec3::new(0.02, 0.03, 0.07);
+        let expected = camera.project(p).unwrap();
+        let m = view.camera_from_world;
+        let in_camera: [f32; 3] =
+            [0, 1, 2].map(|r| m[r][0] * p.x + m[r][1] * p.y + m[r][2] * p.z + m[r][3]);
+        let got = mvgrasp_render::project(&view.intrinsics, in_camera);
+        assert!((got[0] - expected[0]).abs() < 1e-3 && (got[1] - expected[1]).abs() < 1e-3);
+    }
+}
