@@ -142,19 +142,33 @@ mod tests {
     use crate::objects::test_support::{assert_closed_and_oriented, signed_volume};
 
     fn coarse(category: Category, index: u32, seed: u64, cell_m: f32) -> GeneratedObject {
+        with_params(category, index, seed, &MarchingParams::with_cell(cell_m))
+    }
+
+    fn with_params(
+        category: Category,
+        index: u32,
+        seed: u64,
+        p: &MarchingParams,
+    ) -> GeneratedObject {
         let spec = ObjectSpec {
             category,
             index,
             seed,
         };
-        generate_with(&spec, &MarchingParams::with_cell(cell_m)).unwrap()
+        generate_with(&spec, p).unwrap()
     }
 
     #[test]
     fn every_category_is_closed_outward_and_graspable_sized() {
         for category in Category::ALL {
             for index in 0..2 {
-                let object = coarse(category, index, 11, 0.0025);
+                // Index 0 simplified, index 1 raw (simplifying is slow in debug builds).
+                let mut params = MarchingParams::with_cell(0.003);
+                if index == 1 {
+                    params.simplify_tolerance_m = 0.0;
+                }
+                let object = with_params(category, index, 11, &params);
                 let name = &object.name;
                 assert_closed_and_oriented(&object.mesh);
                 let volume = signed_volume(&object.mesh);
@@ -170,10 +184,15 @@ mod tests {
 
     #[test]
     fn sizes_hold_over_many_seeds() {
-        // A coarse grid is enough to check the size ranges of many parameter draws.
+        // A coarse, unsimplified grid is enough to check the sizes of many parameter draws.
+        let fast = MarchingParams {
+            cell_m: 0.005,
+            simplify_tolerance_m: 0.0,
+            max_edge_m: 0.0,
+        };
         for category in Category::ALL {
-            for index in 0..12 {
-                let object = coarse(category, index, 3, 0.005);
+            for index in 0..10 {
+                let object = with_params(category, index, 3, &fast);
                 let e = object.extents_m();
                 let name = &object.name;
                 assert!((0.01..=0.075).contains(&e.min_element()), "{name}: {e:?}");
@@ -214,7 +233,7 @@ mod tests {
     }
 
     #[test]
-    fn default_object_is_mug_zero() {
+    fn names_and_parameter_categories() {
         let spec = ObjectSpec {
             category: Category::Mug,
             index: 0,

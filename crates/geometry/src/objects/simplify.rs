@@ -191,19 +191,6 @@ impl Mesh {
             .map(|&t| self.tris[t as usize])
             .map(|t| t.into_iter().find(|&k| k != u && k != v).unwrap_or(u))
             .collect();
-        let (nu, nv) = (self.neighbours(u), self.neighbours(v));
-        let common: Vec<u32> = nu.iter().copied().filter(|k| nv.contains(k)).collect();
-        let [a, b] = shared[..] else {
-            return false;
-        };
-        let mut opposite = [a, b];
-        opposite.sort_unstable();
-        if common != opposite || self.neighbours(a).contains(&b) {
-            return false;
-        }
-        if nu.len() + nv.len() < 7 {
-            return false;
-        }
         // Geometry: no surviving triangle may flip, collapse or grow too long an edge.
         for &w in &[u, v] {
             for &t in &self.around[w as usize] {
@@ -229,6 +216,19 @@ impl Mesh {
                     return false;
                 }
             }
+        }
+        let (nu, nv) = (self.neighbours(u), self.neighbours(v));
+        let common: Vec<u32> = nu.iter().copied().filter(|k| nv.contains(k)).collect();
+        let [a, b] = shared[..] else {
+            return false;
+        };
+        let mut opposite = [a, b];
+        opposite.sort_unstable();
+        if common != opposite || self.neighbours(a).contains(&b) {
+            return false;
+        }
+        if nu.len() + nv.len() < 7 {
+            return false;
         }
         true
     }
