@@ -42,6 +42,11 @@ impl RayCaster {
         Ok(Self { trimesh })
     }
 
+    /// The parry triangle mesh behind the casts (for collision and distance queries).
+    pub fn trimesh(&self) -> &TriMesh {
+        &self.trimesh
+    }
+
     /// The first surface hit by the ray from `origin` along `direction` within `max_distance`
     /// (in units of `direction`'s length), from either side of a triangle.
     pub fn cast(&self, origin: Vec3, direction: Vec3, max_distance: f32) -> Option<RayHit> {

@@ -16,6 +16,14 @@ pub enum GraspError {
         /// What would be valid.
         expected: &'static str,
     },
+    /// The object cannot be analysed.
+    #[error("object {}: {detail}", path.display())]
+    Object {
+        /// What is wrong.
+        detail: String,
+        /// The mesh's file.
+        path: std::path::PathBuf,
+    },
 }
 
 /// `Result` with [`GraspError`].

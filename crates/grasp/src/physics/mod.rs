@@ -1,0 +1,1 @@
+//! Physics validation with rapier (being written).

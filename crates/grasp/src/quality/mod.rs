@@ -1,0 +1,1 @@
+//! Grasp quality (being written).
