@@ -92,6 +92,7 @@ fn run(args: &Args) -> Result<(), String> {
         .upload(&[MeshInput {
             positions: &positions,
             indices: mesh.triangles(),
+            sides: mvgrasp::convert::sides_of(&mesh),
             colors: Colors::PerFace(&colors),
             world_from_mesh: IDENTITY,
             instance_id: 1,

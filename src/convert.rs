@@ -1,7 +1,23 @@
 //! The one place where geometry's types become the renderer's plain arrays.
 
-use mvgrasp_geometry::{Camera, Intrinsics, Pose3};
-use mvgrasp_render::{Intrinsics as RenderIntrinsics, View};
+use mvgrasp_geometry::{Camera, Intrinsics, Pose3, TriangleMesh};
+use mvgrasp_render::{Intrinsics as RenderIntrinsics, Sides, View};
+
+/// Which sides of `mesh` to draw: front faces only for a closed surface wound outwards (no
+/// boundary edge, no neighbours wound against each other, positive signed volume), where back
+/// faces never show from outside; both sides otherwise. A few non-manifold edges (three faces
+/// on an edge, common in scans such as YCB's) leave a surface closed and are allowed.
+pub fn sides_of(mesh: &TriangleMesh) -> Sides {
+    let topology = mesh.topology();
+    if topology.boundary_edges == 0
+        && topology.misoriented_edges == 0
+        && mesh.signed_volume_m3() > 0.0
+    {
+        Sides::Front
+    } else {
+        Sides::Both
+    }
+}
 
 /// A pose as the row-major 4x4 matrix the renderer takes.
 pub fn row_major(pose: &Pose3) -> [[f32; 4]; 4] {

@@ -2,10 +2,10 @@
 //! colours, one colouring for the training views and a novel one for the test views.
 
 use mvgrasp_geometry::{Pose3, StablePoseParams, TriangleMesh, stable_poses};
-use mvgrasp_render::{Colors, IDENTITY, MeshInput, random_colors};
+use mvgrasp_render::{Colors, IDENTITY, MeshInput, Sides, random_colors};
 use serde::Serialize;
 
-use crate::convert::row_major;
+use crate::convert::{row_major, sides_of};
 use crate::error::Result;
 
 /// Mask value of the object.
@@ -98,6 +98,7 @@ pub struct SceneData {
     positions: Vec<[f32; 3]>,
     world_from_object: [[f32; 4]; 4],
     table_positions: [[f32; 3]; 4],
+    sides: Sides,
 }
 
 /// The table's two triangles.
@@ -115,6 +116,7 @@ impl SceneData {
                 .map(|v| v.to_array())
                 .collect(),
             world_from_object: row_major(&object.table_from_object),
+            sides: sides_of(&object.mesh),
             table_positions: [[-h, -h, 0.0], [h, -h, 0.0], [h, h, 0.0], [-h, h, 0.0]],
         }
     }
@@ -133,6 +135,7 @@ impl SceneData {
         let mut inputs = vec![MeshInput {
             positions: &self.positions,
             indices: object.mesh.triangles(),
+            sides: self.sides,
             colors,
             world_from_mesh: self.world_from_object,
             instance_id: OBJECT_ID,
@@ -141,6 +144,7 @@ impl SceneData {
             inputs.push(MeshInput {
                 positions: &self.table_positions,
                 indices: &TABLE_TRIANGLES,
+                sides: Sides::Both,
                 colors: Colors::Uniform(TABLE_RGB),
                 world_from_mesh: IDENTITY,
                 instance_id: TABLE_ID,

@@ -5,7 +5,7 @@
 
 use std::time::Instant;
 
-use mvgrasp_render::{Backend, Colors, IDENTITY, Intrinsics, MeshInput, Renderer, View};
+use mvgrasp_render::{Backend, Colors, IDENTITY, Intrinsics, MeshInput, Renderer, Sides, View};
 
 const VIEWS: usize = 20;
 
@@ -38,6 +38,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let scene = renderer.upload(&[MeshInput {
             positions: &positions,
             indices: &indices,
+            sides: Sides::Front,
             colors: Colors::PerFace(&colors),
             world_from_mesh: IDENTITY,
             instance_id: 1,

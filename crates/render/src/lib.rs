@@ -18,5 +18,5 @@ pub use colors::random_colors;
 pub use depth8::depth_to_u8;
 pub use error::{INSTALL_HINT, RenderError, Result};
 pub use frame::Frame;
-pub use mesh::{Colors, MeshInput};
+pub use mesh::{Colors, MeshInput, Sides};
 pub use renderer::{Renderer, Scene};

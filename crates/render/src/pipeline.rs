@@ -1,4 +1,4 @@
-//! The one render pipeline: `shader.wgsl`, the vertex layout of `mesh.rs`, a per-view uniform
+//! The render pipelines (one drawing both sides of triangles, one front faces only): `shader.wgsl`, the vertex layout of `mesh.rs`, a per-view uniform
 //! block bound with a dynamic offset, two colour targets (RGB + id, depth z) and a z-buffer.
 
 use std::num::NonZeroU64;
@@ -9,9 +9,12 @@ use crate::targets::{COLOR_FORMAT, DEPTH_OUT_FORMAT, ZBUFFER_FORMAT};
 /// Bytes of the per-view uniform block: two 4x4 f32 matrices.
 pub(crate) const VIEW_UNIFORM_BYTES: u64 = 128;
 
-/// The compiled pipeline and the layout of its per-view bind group.
+/// The compiled pipelines and the layout of their per-view bind group.
 pub(crate) struct Pipeline {
-    pub pipeline: wgpu::RenderPipeline,
+    /// Draws both sides of every triangle ([`crate::Sides::Both`]).
+    pub two_sided: wgpu::RenderPipeline,
+    /// Culls back faces, counter-clockwise in the image being the front ([`crate::Sides::Front`]).
+    pub front_only: wgpu::RenderPipeline,
     pub view_layout: wgpu::BindGroupLayout,
 }
 
@@ -53,45 +56,48 @@ impl Pipeline {
                 write_mask: wgpu::ColorWrites::ALL,
             })
         };
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("mvgrasp-render pipeline"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &shader,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: VERTEX_BYTES as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &VERTEX_ATTRIBUTES,
-                })],
-            },
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::TriangleList,
-                // Meshes come with any winding: draw both sides.
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: ZBUFFER_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            // One sample: depth and mask must not blend across edges.
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &shader,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[replace(COLOR_FORMAT), replace(DEPTH_OUT_FORMAT)],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let make = |label, cull_mode| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(&layout),
+                vertex: wgpu::VertexState {
+                    module: &shader,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(wgpu::VertexBufferLayout {
+                        array_stride: VERTEX_BYTES as u64,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &VERTEX_ATTRIBUTES,
+                    })],
+                },
+                primitive: wgpu::PrimitiveState {
+                    topology: wgpu::PrimitiveTopology::TriangleList,
+                    front_face: wgpu::FrontFace::Ccw,
+                    cull_mode,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: ZBUFFER_FORMAT,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                // One sample: depth and mask must not blend across edges.
+                multisample: wgpu::MultisampleState::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &shader,
+                    entry_point: Some("fs_main"),
+                    compilation_options: Default::default(),
+                    targets: &[replace(COLOR_FORMAT), replace(DEPTH_OUT_FORMAT)],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
         Self {
-            pipeline,
+            two_sided: make("mvgrasp-render two-sided pipeline", None),
+            front_only: make("mvgrasp-render front-only pipeline", Some(wgpu::Face::Back)),
             view_layout,
         }
     }

@@ -44,6 +44,8 @@ struct State {
 pub struct Scene {
     renderer_id: u64,
     vertices: wgpu::Buffer,
+    /// The front-only meshes' vertices come first in `vertices`.
+    front_vertex_count: u32,
     vertex_count: u32,
     mesh_count: usize,
 }
@@ -146,7 +148,8 @@ impl Renderer {
     /// [`RenderError::InvalidParameter`] for no meshes, [`RenderError::TooLarge`] past the
     /// device's buffer size.
     pub fn upload(&self, meshes: &[MeshInput<'_>]) -> Result<Scene> {
-        let (bytes, vertex_count) = expand(meshes)?;
+        let expanded = expand(meshes)?;
+        let (bytes, vertex_count) = (expanded.bytes, expanded.vertices);
         let limit = self.gpu.limits.max_buffer_size;
         let too_large = |what, needed: u64, limit: u64| RenderError::TooLarge {
             op: "upload",
@@ -174,6 +177,8 @@ impl Renderer {
         Ok(Scene {
             renderer_id: self.id,
             vertices,
+            // Fits: no more than `vertex_count`.
+            front_vertex_count: u32::try_from(expanded.front_vertices).unwrap_or(vertex_count),
             vertex_count,
             mesh_count: meshes.len(),
         })
@@ -349,10 +354,16 @@ impl Renderer {
                     occlusion_query_set: None,
                     multiview_mask: None,
                 });
-                pass.set_pipeline(&self.pipeline.pipeline);
                 pass.set_bind_group(0, bind_group, &[offset]);
                 pass.set_vertex_buffer(0, scene.vertices.slice(..));
-                pass.draw(0..scene.vertex_count, 0..1);
+                if scene.front_vertex_count > 0 {
+                    pass.set_pipeline(&self.pipeline.front_only);
+                    pass.draw(0..scene.front_vertex_count, 0..1);
+                }
+                if scene.vertex_count > scene.front_vertex_count {
+                    pass.set_pipeline(&self.pipeline.two_sided);
+                    pass.draw(scene.front_vertex_count..scene.vertex_count, 0..1);
+                }
             }
             encode_copies(&mut encoder, t, staging_buffer, slot);
         }

@@ -7,7 +7,7 @@ mod common;
 
 use common::{centred, cuboid, look_at, renderers, sphere};
 use mvgrasp_render::{
-    Colors, Frame, IDENTITY, Intrinsics, MeshInput, Renderer, View, random_colors,
+    Colors, Frame, IDENTITY, Intrinsics, MeshInput, Renderer, Sides, View, random_colors,
 };
 
 /// `n` cameras on a ring 0.6 m from the origin, 0.4 m up, looking at the origin.
@@ -42,12 +42,24 @@ fn scene_meshes() -> TestScene {
 }
 
 fn upload(r: &Renderer, s: &TestScene) -> mvgrasp_render::Scene {
+    upload_with(r, s, Sides::Front, &s.sphere.1)
+}
+
+/// The test scene with the sphere's triangles `sphere_indices`, drawn with `sides` (the box
+/// always both sides).
+fn upload_with(
+    r: &Renderer,
+    s: &TestScene,
+    sides: Sides,
+    sphere_indices: &[[u32; 3]],
+) -> mvgrasp_render::Scene {
     let mut lifted = IDENTITY;
     lifted[2][3] = 0.08;
     r.upload(&[
         MeshInput {
             positions: &s.sphere.0,
-            indices: &s.sphere.1,
+            indices: sphere_indices,
+            sides,
             colors: Colors::PerVertex(&s.colours),
             world_from_mesh: lifted,
             instance_id: 1,
@@ -55,6 +67,7 @@ fn upload(r: &Renderer, s: &TestScene) -> mvgrasp_render::Scene {
         MeshInput {
             positions: &s.table.0,
             indices: &s.table.1,
+            sides: Sides::Both,
             colors: Colors::PerFace(&[[180, 180, 170]; 12]),
             world_from_mesh: IDENTITY,
             instance_id: 2,
@@ -201,6 +214,46 @@ fn more_views_than_one_batch_holds_come_back_in_order() {
                 &frames[i],
                 &single,
                 &format!("{} view {i}", r.adapter_info()),
+            );
+        }
+    }
+}
+
+#[test]
+fn front_faces_only_gives_the_same_frames_for_a_closed_outward_mesh() {
+    let Some(renderers) = renderers() else { return };
+    let meshes = scene_meshes();
+    let views = ring(6, Intrinsics::PHOXI_S);
+    // The same sphere wound inside out: with front faces only its far half shows.
+    let inside_out: Vec<[u32; 3]> = meshes.sphere.1.iter().map(|&[a, b, c]| [a, c, b]).collect();
+    for r in renderers {
+        let both = r
+            .render(
+                &upload_with(r, &meshes, Sides::Both, &meshes.sphere.1),
+                &views,
+            )
+            .unwrap();
+        let front = r
+            .render(
+                &upload_with(r, &meshes, Sides::Front, &meshes.sphere.1),
+                &views,
+            )
+            .unwrap();
+        let culled_wrong = r
+            .render(&upload_with(r, &meshes, Sides::Front, &inside_out), &views)
+            .unwrap();
+        for (i, ((b, f), w)) in both.iter().zip(&front).zip(&culled_wrong).enumerate() {
+            let what = format!("{} view {i}", r.adapter_info());
+            assert_same(b, f, &what);
+            // Where the sphere shows, the inside-out one is farther away (its back half).
+            let farther = (0..b.depth_m.len())
+                .filter(|&p| b.mask[p] == 1 && w.mask[p] == 1)
+                .filter(|&p| w.depth_m[p] > b.depth_m[p] + 0.01)
+                .count();
+            let sphere_pixels = b.mask.iter().filter(|&&m| m == 1).count();
+            assert!(
+                sphere_pixels > 1000 && farther * 10 > sphere_pixels * 9,
+                "{what}: {farther} of {sphere_pixels} sphere pixels show the far side"
             );
         }
     }

@@ -9,7 +9,8 @@
 use std::sync::OnceLock;
 
 use mvgrasp_render::{
-    Backend, Colors, IDENTITY, INSTALL_HINT, Intrinsics, MeshInput, RenderError, Renderer, View,
+    Backend, Colors, IDENTITY, INSTALL_HINT, Intrinsics, MeshInput, RenderError, Renderer, Sides,
+    View,
 };
 
 /// The renderers to test on, or `None` (after printing why) when GPU tests are skipped.
@@ -137,6 +138,7 @@ pub fn mesh<'a>(
     MeshInput {
         positions,
         indices,
+        sides: Sides::Both,
         colors: Colors::Uniform(color),
         world_from_mesh: IDENTITY,
         instance_id,
