@@ -5,9 +5,11 @@
 //! Today the pipeline stops at describing an object for planning: its mesh facts, the poses it
 //! rests in, and the cameras that will look at it.
 
+pub mod cli;
 pub mod convert;
 pub mod dataset;
 pub mod error;
+pub mod grasp_image;
 pub mod report;
 
 pub use error::{Error, Result};

@@ -2,33 +2,19 @@
 //! mug) and reports what the planner knows about it: mesh facts, stable poses, camera views.
 //! Grasp planning joins this command as its issues land.
 
-use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Parser;
-use mvgrasp::geometry::objects::{Category, generate};
-use mvgrasp::geometry::{Intrinsics, IntrinsicsPreset, LoadOptions, load_mesh_with};
+use mvgrasp::cli::ObjectArgs;
+use mvgrasp::geometry::{Intrinsics, IntrinsicsPreset};
 use mvgrasp::{ObjectReport, ReportParams};
 
 /// Plan for an object: today, describe it (mesh facts, stable poses, hemisphere views).
 #[derive(Parser, Debug)]
 #[command(version, about)]
 struct Args {
-    /// A mesh file (OBJ, STL or URDF, metres). Default: the built-in object below.
-    #[arg(long)]
-    mesh: Option<PathBuf>,
-    /// Multiply the mesh's coordinates by this (0.001 for millimetres).
-    #[arg(long, default_value_t = 1.0)]
-    scale: f32,
-    /// Built-in object category when no --mesh is given.
-    #[arg(long, default_value = "mug")]
-    category: String,
-    /// Built-in object index within its category.
-    #[arg(long, default_value_t = 0)]
-    index: u32,
-    /// Seed for the built-in object and the camera layouts.
-    #[arg(long, default_value_t = 0)]
-    seed: u64,
+    #[command(flatten)]
+    object: ObjectArgs,
     /// Camera intrinsics preset: phoxi_s, primesense, realsense_d435.
     #[arg(long, default_value = "phoxi_s")]
     camera: String,
@@ -50,33 +36,10 @@ fn main() -> ExitCode {
 
 fn run(args: &Args) -> Result<(), String> {
     let preset: IntrinsicsPreset = args.camera.parse().map_err(|e| format!("--camera: {e}"))?;
-    let (name, mesh) = match &args.mesh {
-        Some(path) => {
-            let options = LoadOptions {
-                scale: args.scale,
-                ..Default::default()
-            };
-            let mesh = load_mesh_with(path, &options).map_err(|e| e.to_string())?;
-            let name = path
-                .file_stem()
-                .map_or("mesh".into(), |s| s.to_string_lossy().into_owned());
-            (name, mesh)
-        }
-        None => {
-            let category: Category = args
-                .category
-                .parse()
-                .map_err(|e| format!("--category: {e}"))?;
-            let object = generate(category, args.index, args.seed).map_err(|e| e.to_string())?;
-            (
-                format!("{} (built-in, seed {})", object.name, args.seed),
-                object.mesh,
-            )
-        }
-    };
+    let (name, _, mesh) = args.object.load()?;
     let params = ReportParams {
         intrinsics: Intrinsics::preset(preset),
-        views_seed: args.seed,
+        views_seed: args.object.seed,
         ..Default::default()
     };
     let report = ObjectReport::describe(&name, &mesh, &params).map_err(|e| e.to_string())?;

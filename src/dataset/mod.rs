@@ -15,7 +15,7 @@
 //! Each object is written into `.<object>.partial/` and renamed when complete, so an
 //! interrupted run leaves no half object; a rerun skips finished objects.
 
-mod images;
+pub(crate) mod images;
 mod scene;
 
 pub use images::{DEPTH_PNG_UNITS_PER_M, write_depth_png, write_png8};

@@ -46,7 +46,8 @@ pub struct MassFacts {
 }
 
 /// Bounds on the cost of a convex decomposition (parry's VHACD).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct DecompositionParams {
     /// Voxels along the longest side (cost grows with its cube); 16 to 128.
     pub resolution: u32,

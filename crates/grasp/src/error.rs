@@ -16,6 +16,14 @@ pub enum GraspError {
         /// What would be valid.
         expected: &'static str,
     },
+    /// A gripper file cannot be used.
+    #[error("gripper file {}: {detail}", path.display())]
+    GripperFile {
+        /// What is wrong.
+        detail: String,
+        /// The file.
+        path: std::path::PathBuf,
+    },
     /// The object cannot be analysed.
     #[error("object {}: {detail}", path.display())]
     Object {

@@ -1,4 +1,6 @@
-//! Parallel-jaw gripper parameters, with presets.
+//! Parallel-jaw gripper parameters: presets, files (TOML, JSON, Dex-Net's `params.json`).
+
+use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
@@ -6,7 +8,15 @@ use crate::error::{GraspError, Result};
 
 /// A parallel-jaw gripper, in the gripper frame of [`crate::Grasp`]: fingers close along x,
 /// approach along z, the origin midway between the finger tips.
+///
+/// Collision geometry: two finger boxes (`finger_thickness_m` x `finger_width_m` x
+/// `finger_length_m`) spanning z in `[-finger_length_m, 0]` at x = +-(opening / 2 +
+/// thickness / 2), and a palm box of `palm_size_m` centred on the z axis behind them.
+///
+/// In a file (TOML or JSON) every field is optional and defaults to the Panda preset's, so
+/// `max_opening_m = 0.06` alone is a Panda with a narrower stroke.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct Gripper {
     /// A short name ("panda", "yumi", "robotiq_2f_85").
     pub name: String,
@@ -22,6 +32,9 @@ pub struct Gripper {
     pub finger_thickness_m: f32,
     /// Largest closing force, newtons.
     pub force_limit_n: f32,
+    /// Palm box behind the fingers: extent along the closing axis (x), across it (y) and
+    /// along the approach (z), metres.
+    pub palm_size_m: [f32; 3],
 }
 
 /// The grippers mvgrasp knows by name.
@@ -81,6 +94,12 @@ impl Gripper {
                 GripperPreset::Yumi => (0.05, 0.03, 0.02, 0.01, 20.0),
                 GripperPreset::Robotiq2f85 => (0.085, 0.04, 0.022, 0.01, 235.0),
             };
+        // Hand bodies, from the makers' drawings, rounded to a box.
+        let palm_size_m = match preset {
+            GripperPreset::Panda => [0.20, 0.06, 0.06],
+            GripperPreset::Yumi => [0.08, 0.04, 0.04],
+            GripperPreset::Robotiq2f85 => [0.15, 0.06, 0.09],
+        };
         Self {
             name: preset.name().to_string(),
             max_opening_m,
@@ -89,7 +108,55 @@ impl Gripper {
             finger_width_m,
             finger_thickness_m,
             force_limit_n,
+            palm_size_m,
         }
+    }
+
+    /// Reads a gripper from a file: `.toml` or `.json` with [`Gripper`]'s fields (missing ones
+    /// are the Panda's), or Dex-Net's `params.json` (`min_width`, `max_width`, `force_limit`,
+    /// `finger_radius`; the other dimensions are the Panda's), then validates it.
+    ///
+    /// # Errors
+    /// [`GraspError::GripperFile`] naming the file when it cannot be read or parsed, has an
+    /// unknown field, or describes an invalid gripper.
+    pub fn from_file(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let fail = |detail: String| GraspError::GripperFile {
+            detail,
+            path: path.to_path_buf(),
+        };
+        let text = std::fs::read_to_string(path).map_err(|e| fail(e.to_string()))?;
+        let extension = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .unwrap_or_default();
+        let names_itself = match extension {
+            "toml" => toml::from_str::<toml::Table>(&text).is_ok_and(|t| t.contains_key("name")),
+            _ => serde_json::from_str::<serde_json::Value>(&text)
+                .is_ok_and(|v| v.get("name").is_some()),
+        };
+        let mut gripper: Gripper = match extension {
+            "toml" => toml::from_str(&text).map_err(|e| fail(e.to_string()))?,
+            "json" if text.contains("\"max_width\"") => {
+                let dexnet: DexNetParams =
+                    serde_json::from_str(&text).map_err(|e| fail(e.to_string()))?;
+                dexnet.into_gripper()
+            }
+            "json" => serde_json::from_str(&text).map_err(|e| fail(e.to_string()))?,
+            other => {
+                return Err(fail(format!(
+                    "unknown extension {other:?}: expected .toml or .json"
+                )));
+            }
+        };
+        if !names_itself {
+            gripper.name = path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
+        }
+        gripper.validate().map_err(|e| fail(e.to_string()))?;
+        Ok(gripper)
     }
 
     /// Checks that every dimension is finite and positive and the openings are ordered.
@@ -107,6 +174,9 @@ impl Gripper {
         };
         for (name, value) in [
             ("max_opening_m", self.max_opening_m),
+            ("palm_size_m[0]", self.palm_size_m[0]),
+            ("palm_size_m[1]", self.palm_size_m[1]),
+            ("palm_size_m[2]", self.palm_size_m[2]),
             ("finger_length_m", self.finger_length_m),
             ("finger_width_m", self.finger_width_m),
             ("finger_thickness_m", self.finger_thickness_m),
@@ -128,10 +198,39 @@ impl Gripper {
         Ok(())
     }
 
+    /// Opening plus both fingers: the hand's reach along the closing axis when fully open.
+    pub fn open_span_m(&self) -> f32 {
+        self.max_opening_m + 2.0 * self.finger_thickness_m
+    }
+
     /// Whether an object `width_m` wide fits between the open fingers and is not narrower than
     /// they close.
     pub fn fits(&self, width_m: f32) -> bool {
         (self.min_opening_m..=self.max_opening_m).contains(&width_m)
+    }
+}
+
+/// Dex-Net's gripper `params.json`.
+#[derive(Deserialize)]
+struct DexNetParams {
+    min_width: f32,
+    max_width: f32,
+    force_limit: f32,
+    /// Dex-Net's soft-finger contact radius; the finger width here is its diameter.
+    finger_radius: Option<f32>,
+}
+
+impl DexNetParams {
+    fn into_gripper(self) -> Gripper {
+        let panda = Gripper::default();
+        Gripper {
+            name: String::new(),
+            min_opening_m: self.min_width,
+            max_opening_m: self.max_width,
+            force_limit_n: self.force_limit,
+            finger_width_m: self.finger_radius.map_or(panda.finger_width_m, |r| 2.0 * r),
+            ..panda
+        }
     }
 }
 
@@ -173,5 +272,62 @@ mod tests {
                 .contains("force_limit_n")
         );
         assert!(Gripper::default().fits(0.05) && !Gripper::default().fits(0.09));
+    }
+}
+
+#[cfg(test)]
+mod file_tests {
+    use super::*;
+
+    fn write(name: &str, text: &str) -> (tempfile::TempDir, std::path::PathBuf) {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        (dir, path)
+    }
+
+    #[test]
+    fn toml_overrides_the_panda() {
+        let (_d, path) = write(
+            "narrow.toml",
+            "max_opening_m = 0.06\nforce_limit_n = 30.0\n",
+        );
+        let g = Gripper::from_file(&path).unwrap();
+        assert_eq!((g.max_opening_m, g.force_limit_n), (0.06, 30.0));
+        assert_eq!(g.finger_length_m, Gripper::default().finger_length_m);
+        assert_eq!(g.name, "narrow");
+    }
+
+    #[test]
+    fn dexnet_params_json_is_read() {
+        let (_d, path) = write(
+            "params.json",
+            r#"{"min_width": 0.0, "force_limit": 20.0, "max_width": 0.05, "finger_radius": 0.01}"#,
+        );
+        let g = Gripper::from_file(&path).unwrap();
+        assert_eq!(
+            (g.max_opening_m, g.force_limit_n, g.finger_width_m),
+            (0.05, 20.0, 0.02)
+        );
+    }
+
+    #[test]
+    fn bad_files_name_the_file_and_the_problem() {
+        let (_d, path) = write("typo.toml", "max_openin_m = 0.06\n");
+        let err = Gripper::from_file(&path).unwrap_err().to_string();
+        assert!(
+            err.contains("typo.toml") && err.contains("max_openin_m"),
+            "{err}"
+        );
+        let (_d, path) = write("wide.json", r#"{"min_opening_m": 0.2}"#);
+        let err = Gripper::from_file(&path).unwrap_err().to_string();
+        assert!(
+            err.contains("wide.json") && err.contains("min_opening_m"),
+            "{err}"
+        );
+        let err = Gripper::from_file("/nonexistent/g.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("/nonexistent/g.toml"), "{err}");
     }
 }

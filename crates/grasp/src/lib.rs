@@ -1,13 +1,19 @@
 #![doc = include_str!("../README.md")]
 
+pub mod analysis;
+pub mod collision;
 pub mod error;
 pub mod grasp;
 pub mod gripper;
 pub mod object;
 pub mod physics;
 pub mod quality;
+pub mod sampling;
 
+pub use analysis::{AnalysedGrasp, Analysis, AnalysisConfig, analyse};
+pub use collision::{Collision, CollisionParams, HandShapes, check_collision};
 pub use error::{GraspError, Result};
 pub use grasp::{Grasp, ImageGrasp, PaperGrasp};
 pub use gripper::{Gripper, GripperPreset};
 pub use object::GraspObject;
+pub use sampling::{SampledGrasp, SamplingParams, SamplingReport, sample_antipodal};

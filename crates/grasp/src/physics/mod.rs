@@ -1,1 +1,66 @@
-//! Physics validation with rapier (being written).
+//! Physics validation of parallel-jaw grasps with rapier: close, lift, shake.
+//!
+//! [`PhysicsObject`] holds an object's convex parts and mass, built once; [`simulate_grasp`] runs
+//! one deterministic trial of a [`crate::Grasp`] on it; [`success_probability`] runs many under
+//! pose noise.
+//!
+//! # The scene
+//!
+//! World = table frame: +z up, the table's top is the plane z = 0 (a fixed slab). The object is
+//! one dynamic body placed at `table_from_object`, colliding through its convex parts, with the
+//! mesh's own mass, centre of mass and inertia at [`PhysicsParams::object_density_kg_m3`]. The
+//! gripper is a kinematic palm box (as wide as the open hand, [`PhysicsParams::palm_depth_m`]
+//! deep, behind the fingers) driven by position, and two dynamic finger boxes on prismatic
+//! joints along the closing axis. Each joint has a velocity motor (target: the closing speed)
+//! whose force is capped at the gripper's `force_limit_n`: a finger moves at the closing speed
+//! until the object stops it, then squeezes with the force limit. The two fingers are driven
+//! independently, as a coupled gripper behaves while the object slides freely: the first finger
+//! to touch pushes the object until the other one arrives. Fingers feel no gravity (the palm
+//! carries them) and do not collide with each other or with the palm.
+//!
+//! # The phases
+//!
+//! 1. Settle: the object alone on the table for [`PhysicsParams::settle_time_s`]. If it moves
+//!    more than the settle tolerances the pose is not stable: [`FailureStage::Settle`].
+//! 2. Approach: the open gripper (fingers at the widest opening) moves along its approach from
+//!    [`PhysicsParams::pregrasp_distance_m`] back to the grasp pose. It is checked by an exact
+//!    swept-volume test (conservative advancement on exact distances from both fingers and the
+//!    palm to the table and the settled object), not stepped: coming within 0.1 mm of anything
+//!    on the way, or at either end, is [`FailureStage::Approach`]. A kinematic hand stepped
+//!    along the same path would feel the same contacts later and more coarsely, and could
+//!    tunnel through a thin part; the sweep needs no simulated time.
+//! 3. Close: the fingers close until both stop (three steps slower than a tenth of the closing
+//!    speed), then squeeze for [`PhysicsParams::close_hold_s`]. Unless both fingers touch the
+//!    object (closer than [`PhysicsParams::contact_tolerance_m`]) and the opening is wider than
+//!    the gripper's narrowest: [`FailureStage::Close`].
+//! 4. Lift: the palm rises [`PhysicsParams::lift_height_m`] straight up over
+//!    [`PhysicsParams::lift_duration_s`] on a minimum-jerk profile, then holds still for
+//!    [`PhysicsParams::lift_hold_s`]. Not held (below): [`FailureStage::Lift`].
+//! 5. Shake: for [`PhysicsParams::shake_duration_s`] the palm moves up and down by
+//!    [`PhysicsParams::shake_amplitude_m`] and turns about the closing axis by
+//!    [`PhysicsParams::shake_angle_rad`] at [`PhysicsParams::shake_frequency_hz`], faded in and
+//!    out by a half sine so it starts and ends at rest; then holds still for
+//!    [`PhysicsParams::final_hold_s`]. Not held: [`FailureStage::Shake`].
+//!
+//! # Success
+//!
+//! The object is held when, at the end of a phase: both fingers are within
+//! [`PhysicsParams::contact_tolerance_m`] of it (exact distances, not contact caches), it is
+//! farther than that from the table, its centre of mass has risen at least
+//! [`PhysicsParams::min_lift_fraction`] of the lift height above where it rested, and its centre
+//! of mass has moved at most [`PhysicsParams::max_slip_m`] in the gripper frame since the
+//! fingers closed. A trial succeeds when the object is held after the shake.
+//!
+//! rapier runs single-threaded here (the crate does not enable its `parallel` feature), so a
+//! trial is deterministic: the same inputs give the same outcome and the same final pose bits.
+
+mod object;
+mod params;
+mod robust;
+mod scene;
+mod trial;
+
+pub use object::PhysicsObject;
+pub use params::{PhysicsNoise, PhysicsParams};
+pub use robust::{StageCounts, SuccessEstimate, success_probability};
+pub use trial::{FailureStage, PhysicsOutcome, simulate_grasp};

@@ -1,1 +1,27 @@
-//! Grasp quality (being written).
+//! Grasp quality on meshes: contacts of closing jaws, force closure, Ferrari-Canny epsilon
+//! (Dex-Net's `ferrari_canny_L1`) and its robust mean under pose and friction noise, the label
+//! of Dex-Net 2.0.
+//!
+//! The pieces, in the order a grasp meets them:
+//! - [`find_contacts`]: close the jaws along the closing line (two ray casts).
+//! - [`force_closure`]: the line between the contacts inside both friction cones.
+//! - [`contact_wrenches`] and [`ferrari_canny_l1`]: linearised cones and soft-finger torsion,
+//!   their 6-D convex hull (qhull, f64) and the distance from the origin to its boundary.
+//! - [`grasp_quality`], [`robust_quality`], [`robust_qualities`]: one grasp nominally, under
+//!   [`RobustQualityParams`]' noise, and many grasps in parallel.
+
+mod closure;
+mod contacts;
+mod ferrari_canny;
+mod params;
+mod robust;
+mod wrench;
+
+pub use closure::{force_closure, validate_friction_coef};
+pub use contacts::{Contact, ContactPair, MIN_CONTACT_WIDTH_M, find_contacts};
+pub use ferrari_canny::{ferrari_canny_l1, wrench_set_epsilon};
+pub use params::RobustQualityParams;
+pub use robust::{
+    GraspQuality, RobustQuality, grasp_quality, grasp_seed, robust_qualities, robust_quality,
+};
+pub use wrench::{MAX_CONE_FACES, TorsionModel, WRENCH_DIM, WrenchParams, contact_wrenches};

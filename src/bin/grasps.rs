@@ -1,0 +1,237 @@
+//! `grasps`: antipodal grasps on an object resting on a table, scored (force closure,
+//! Ferrari-Canny epsilon, robust epsilon, Dex-Net 2.0's label) and checked in physics (close,
+//! lift, shake with rapier); writes `grasps.json` and `grasps.png` (the best five).
+//!
+//! cargo run --release --bin grasps -- [--mesh PATH | --category C --index I] [--n 100]
+//!     [--gripper panda|yumi|robotiq_2f_85|FILE] [--pose K] [--physics-trials N] [--out DIR]
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+use clap::Parser;
+use mvgrasp::cli::ObjectArgs;
+use mvgrasp::geometry::{StablePoseParams, stable_poses};
+use mvgrasp::grasp::physics::PhysicsParams;
+use mvgrasp::grasp::{AnalysisConfig, GraspObject, Gripper, GripperPreset, analyse};
+use mvgrasp::grasp_image::write_grasp_picture;
+use serde::Serialize;
+
+/// Sample, score and physically check parallel-jaw grasps on one object.
+#[derive(Parser, Debug)]
+#[command(version, about)]
+struct Args {
+    #[command(flatten)]
+    object: ObjectArgs,
+    /// Grasps to sample.
+    #[arg(long, default_value_t = 100)]
+    n: usize,
+    /// Gripper: a preset (panda, yumi, robotiq_2f_85) or a .toml/.json file.
+    #[arg(long, default_value = "panda")]
+    gripper: String,
+    /// Stable pose to rest the object in (index in the stable-pose list). Default: the most
+    /// probable pose that is not marginal.
+    #[arg(long)]
+    pose: Option<usize>,
+    /// Skip the physics trials.
+    #[arg(long)]
+    no_physics: bool,
+    /// Perturbed physics trials per grasp (a success probability), beside the nominal one.
+    #[arg(long, default_value_t = 0)]
+    physics_trials: usize,
+    /// A TOML file with the analysis parameters (sections sampling, quality, physics, ...).
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Folder for grasps.json and grasps.png.
+    #[arg(long, default_value = "grasps_out")]
+    out: PathBuf,
+}
+
+fn main() -> ExitCode {
+    let args = Args::parse();
+    match run(&args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(message) => {
+            eprintln!("error: {message}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn load_gripper(spec: &str) -> Result<Gripper, String> {
+    match spec.parse::<GripperPreset>() {
+        Ok(preset) => Ok(Gripper::preset(preset)),
+        Err(_) if Path::new(spec).exists() => Gripper::from_file(spec).map_err(|e| e.to_string()),
+        Err(e) => Err(format!("--gripper: {e}, or a gripper file that exists")),
+    }
+}
+
+fn load_config(args: &Args) -> Result<AnalysisConfig, String> {
+    let mut config = match &args.config {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+            toml::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?
+        }
+        None => AnalysisConfig {
+            physics: Some(PhysicsParams::default()),
+            ..AnalysisConfig::default()
+        },
+    };
+    config.sampling.target_grasps = args.n;
+    config.sampling.max_tries = config.sampling.max_tries.max(40 * args.n);
+    if args.no_physics {
+        config.physics = None;
+    }
+    config.physics_trials = args.physics_trials;
+    Ok(config)
+}
+
+/// What `grasps.json` holds.
+#[derive(Serialize)]
+struct Output<'a> {
+    object: &'a str,
+    gripper: &'a Gripper,
+    stable_pose: usize,
+    stable_pose_probability: f32,
+    config: &'a AnalysisConfig,
+    seed: u64,
+    analysis: &'a mvgrasp::grasp::Analysis,
+}
+
+fn run(args: &Args) -> Result<(), String> {
+    let started = Instant::now();
+    let gripper = load_gripper(&args.gripper)?;
+    let config = load_config(args)?;
+    let (name, short_name, mesh) = args.object.load()?;
+    let poses = stable_poses(&mesh, &StablePoseParams::default()).map_err(|e| e.to_string())?;
+    let pose_index = match args.pose {
+        Some(k) if k < poses.len() => k,
+        Some(k) => {
+            return Err(format!(
+                "--pose {k}: {name} has {} stable poses (0..{})",
+                poses.len(),
+                poses.len().saturating_sub(1)
+            ));
+        }
+        None => poses.iter().position(|p| !p.marginal).ok_or_else(|| {
+            format!(
+                "{name}: every stable pose is marginal (it rolls or topples); pass --pose K to plan on one anyway"
+            )
+        })?,
+    };
+    let pose = &poses[pose_index];
+    let object = GraspObject::new(mesh).map_err(|e| e.to_string())?;
+    let analysis = analyse(
+        &object,
+        &pose.table_from_object,
+        &gripper,
+        &config,
+        args.object.seed,
+    )
+    .map_err(|e| e.to_string())?;
+
+    println!(
+        "{name}: stable pose {pose_index} (p = {:.2}), gripper {}",
+        pose.probability, gripper.name
+    );
+    println!("sampling: {}", analysis.sampling.summary());
+    if analysis.grasps.is_empty() {
+        println!("no feasible grasp for this gripper in this pose");
+    }
+    print_table(&analysis);
+
+    std::fs::create_dir_all(&args.out)
+        .map_err(|e| format!("{}: cannot create: {e}", args.out.display()))?;
+    let output = Output {
+        object: &short_name,
+        gripper: &gripper,
+        stable_pose: pose_index,
+        stable_pose_probability: pose.probability,
+        config: &config,
+        seed: args.object.seed,
+        analysis: &analysis,
+    };
+    let json_path = args.out.join("grasps.json");
+    let json = serde_json::to_string_pretty(&output).map_err(|e| e.to_string())?;
+    std::fs::write(&json_path, json)
+        .map_err(|e| format!("{}: cannot write: {e}", json_path.display()))?;
+    let best: Vec<_> = analysis.grasps.iter().take(5).map(|g| g.grasp).collect();
+    let png_path = args.out.join("grasps.png");
+    match write_grasp_picture(
+        &png_path,
+        object.mesh(),
+        &pose.table_from_object,
+        &best,
+        &gripper,
+    ) {
+        Ok(()) => println!("wrote {} and {}", json_path.display(), png_path.display()),
+        Err(e) => println!("wrote {} (no picture: {e})", json_path.display()),
+    }
+    println!("{:.2} s", started.elapsed().as_secs_f64());
+    Ok(())
+}
+
+fn print_table(analysis: &mvgrasp::grasp::Analysis) {
+    let shown = analysis.grasps.len().min(10);
+    if shown == 0 {
+        return;
+    }
+    println!(
+        "best {shown} of {} (by robust epsilon); world frame, table z = 0:",
+        analysis.grasps.len()
+    );
+    println!(
+        "  #  centre (cm)              width cm  closure  epsilon  robust eps  label  physics"
+    );
+    for (i, g) in analysis.grasps.iter().take(shown).enumerate() {
+        let c = g.grasp.center() * 100.0;
+        let physics = match (&g.physics, &g.physics_success) {
+            (Some(o), Some(p)) => format!(
+                "{} ({:.0}% of {})",
+                if o.success { "held" } else { "failed" },
+                100.0 * p.probability,
+                p.trials
+            ),
+            (Some(o), None) if o.success => "held".into(),
+            (Some(o), None) => format!("failed ({:?})", o.failed_at),
+            _ => "-".into(),
+        };
+        println!(
+            "{:>3}  ({:>6.2}, {:>6.2}, {:>5.2})  {:>8.2}  {:>7}  {:>7.4}  {:>10.4}  {:>5}  {physics}",
+            i,
+            c.x,
+            c.y,
+            c.z,
+            g.grasp.width_m * 100.0,
+            if g.quality.nominal_force_closure {
+                "yes"
+            } else {
+                "no"
+            },
+            g.quality.nominal_epsilon,
+            g.quality.robust_epsilon,
+            if g.robust_label { "+" } else { "-" },
+        );
+    }
+    let labelled: Vec<_> = analysis
+        .grasps
+        .iter()
+        .filter(|g| g.physics.is_some())
+        .collect();
+    if !labelled.is_empty() {
+        let count = |label: bool, held: bool| {
+            labelled
+                .iter()
+                .filter(|g| g.robust_label == label && g.physics.is_some_and(|o| o.success) == held)
+                .count()
+        };
+        println!(
+            "robust label vs physics: +held {}  +failed {}  -held {}  -failed {}",
+            count(true, true),
+            count(true, false),
+            count(false, true),
+            count(false, false)
+        );
+    }
+}
