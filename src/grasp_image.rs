@@ -22,6 +22,9 @@ pub const GRASP_COLORS: [[u8; 3]; 5] = [
     [30, 200, 210],
 ];
 
+/// A box's world-frame vertices, triangles and colour.
+type ColoredBox = (Vec<[f32; 3]>, Vec<[u32; 3]>, [u8; 3]);
+
 const OBJECT_RGB: [u8; 3] = [200, 190, 170];
 const TABLE_RGB: [u8; 3] = [110, 110, 120];
 
@@ -38,7 +41,7 @@ pub fn write_grasp_picture(
     grasps: &[Grasp],
     gripper: &Gripper,
 ) -> Result<()> {
-    let boxes: Vec<(Vec<[f32; 3]>, Vec<[u32; 3]>, [u8; 3])> = grasps
+    let boxes: Vec<ColoredBox> = grasps
         .iter()
         .enumerate()
         .flat_map(|(i, grasp)| {

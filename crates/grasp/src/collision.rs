@@ -14,11 +14,8 @@ use crate::object::GraspObject;
 #[serde(default, deny_unknown_fields)]
 pub struct CollisionParams {
     /// The approach is checked too: the hand swept back along -z by this much from the grasp
-    /// (the pre-grasp pose), metres.
+    /// (the pre-grasp pose; physics starts its approach at the same distance), metres.
     pub approach_distance_m: f32,
-    /// The fingers stand this far apart beyond the grasp's width while they approach (clipped
-    /// to the gripper's maximum opening), metres.
-    pub finger_clearance_m: f32,
     /// Shapes closer than this to the table count as touching it, metres.
     pub table_margin_m: f32,
 }
@@ -26,8 +23,7 @@ pub struct CollisionParams {
 impl Default for CollisionParams {
     fn default() -> Self {
         Self {
-            approach_distance_m: 0.05,
-            finger_clearance_m: 0.01,
+            approach_distance_m: 0.08,
             table_margin_m: 0.002,
         }
     }
@@ -117,22 +113,17 @@ impl HandShapes {
     }
 }
 
-/// Checks a grasp `width_m` wide with the gripper at `object_from_gripper`: the fingers open to
-/// the width plus clearance, swept along the approach, against the object; and, when the object
-/// rests on a table (`table_from_object`, the table the plane z = 0), against the table.
+/// Checks the gripper at `object_from_gripper`, fully open as it comes in (as physics does),
+/// swept along its approach, against the object; and, when the object rests on a table
+/// (`table_from_object`, the table the plane z = 0), against the table.
 pub fn check_collision(
     object: &GraspObject,
     gripper: &Gripper,
     object_from_gripper: &Pose3,
-    width_m: f32,
     table_from_object: Option<&Pose3>,
     params: &CollisionParams,
 ) -> Collision {
-    let hand = HandShapes::new(
-        gripper,
-        width_m + params.finger_clearance_m,
-        params.approach_distance_m,
-    );
+    let hand = HandShapes::new(gripper, gripper.max_opening_m, params.approach_distance_m);
     let table = table_from_object.is_some_and(|table_from_object| {
         hand.lowest_z(&(*table_from_object * *object_from_gripper)) < params.table_margin_m
     });
@@ -164,7 +155,6 @@ mod tests {
             &cube(),
             &Gripper::default(),
             &top_down(Vec3::new(0.0, 0.0, 0.0)),
-            0.05,
             None,
             &CollisionParams::default(),
         );
@@ -178,7 +168,6 @@ mod tests {
             &cube(),
             &Gripper::default(),
             &top_down(Vec3::new(0.02, 0.0, 0.0)),
-            0.05,
             None,
             &CollisionParams::default(),
         );
@@ -194,28 +183,14 @@ mod tests {
         let gripper = Gripper::default();
         // Grasp line 1 cm above the table: the finger tips stay above it.
         let high = top_down(Vec3::new(0.0, 0.0, -0.015));
-        let c = check_collision(
-            &object,
-            &gripper,
-            &high,
-            0.05,
-            Some(&table_from_object),
-            &params,
-        );
+        let c = check_collision(&object, &gripper, &high, Some(&table_from_object), &params);
         assert!(c.is_free(), "{c:?}");
         // Grasp line 5 mm below the cube's bottom: the finger tips go through the table (and
         // the palm, 5 cm behind the tips, reaches the cube's top).
         let low = top_down(Vec3::new(0.0, 0.0, -0.03));
-        let c = check_collision(
-            &object,
-            &gripper,
-            &low,
-            0.05,
-            Some(&table_from_object),
-            &params,
-        );
+        let c = check_collision(&object, &gripper, &low, Some(&table_from_object), &params);
         assert!(c.table, "{c:?}");
-        let c = check_collision(&object, &gripper, &low, 0.05, None, &params);
+        let c = check_collision(&object, &gripper, &low, None, &params);
         assert!(!c.table, "no table given: {c:?}");
     }
 }

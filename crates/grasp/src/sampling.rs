@@ -96,10 +96,6 @@ impl SamplingParams {
                 "collision.approach_distance_m",
                 self.collision.approach_distance_m,
             ),
-            (
-                "collision.finger_clearance_m",
-                self.collision.finger_clearance_m,
-            ),
         ] {
             if !(value.is_finite() && value >= 0.0) {
                 return bad(name, value.to_string(), "a finite number >= 0");
@@ -319,14 +315,8 @@ fn try_axis(
     for i in 0..k {
         let mut pose = frame(offset + TAU * i as f32 / k as f32);
         pose.translation = center;
-        let collision = check_collision(
-            object,
-            gripper,
-            &pose,
-            contacts.width_m,
-            table_from_object,
-            &params.collision,
-        );
+        let collision =
+            check_collision(object, gripper, &pose, table_from_object, &params.collision);
         if collision.is_free() {
             free.push(SampledGrasp {
                 grasp: Grasp {

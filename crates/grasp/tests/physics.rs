@@ -168,6 +168,26 @@ fn fingers_that_would_go_through_the_table_fail_on_the_approach() {
 }
 
 #[test]
+fn a_box_tipped_on_its_edge_topples_before_the_gripper_comes() {
+    // Resting on one edge, tilted 30 degrees: not a stable pose, it falls onto a face.
+    let mesh = box_mesh(Vec3::splat(0.025));
+    let object = PhysicsObject::new(&mesh, &DecompositionParams::default()).unwrap();
+    let tilt = Rot3::from_rotation_y(30f32.to_radians());
+    let lowest = mesh
+        .vertices()
+        .iter()
+        .map(|v| (tilt * *v).z)
+        .fold(f32::INFINITY, f32::min);
+    let pose = Pose3::from_parts(Vec3::new(0.0, 0.0, -lowest), tilt);
+    let outcome = run(
+        &object,
+        &pose,
+        &top_down(Vec3::new(0.0, 0.0, 0.02), 0.0, 0.05),
+    );
+    assert_eq!(outcome.failed_at, Some(FailureStage::Settle), "{outcome:?}");
+}
+
+#[test]
 fn a_trial_is_deterministic_to_the_bit() {
     let (object, pose) = on_table(&box_mesh(Vec3::new(0.04, 0.02, 0.015)));
     let grasp = top_down(Vec3::new(0.01, 0.0, 0.015), 0.3, 0.04);

@@ -9,14 +9,19 @@
 //! World = table frame: +z up, the table's top is the plane z = 0 (a fixed slab). The object is
 //! one dynamic body placed at `table_from_object`, colliding through its convex parts, with the
 //! mesh's own mass, centre of mass and inertia at [`PhysicsParams::object_density_kg_m3`]. The
-//! gripper is a kinematic palm box (as wide as the open hand, [`PhysicsParams::palm_depth_m`]
-//! deep, behind the fingers) driven by position, and two dynamic finger boxes on prismatic
+//! gripper is a kinematic palm box (the gripper's `palm_size_m`, behind the fingers) driven by position, and two dynamic finger boxes on prismatic
 //! joints along the closing axis. Each joint has a velocity motor (target: the closing speed)
 //! whose force is capped at the gripper's `force_limit_n`: a finger moves at the closing speed
 //! until the object stops it, then squeezes with the force limit. The two fingers are driven
 //! independently, as a coupled gripper behaves while the object slides freely: the first finger
 //! to touch pushes the object until the other one arrives. Fingers feel no gravity (the palm
-//! carries them) and do not collide with each other or with the palm.
+//! carries them) and do not collide with each other or with the palm. The hand always opens to
+//! the gripper's widest, whatever the grasp's `width_m`.
+//!
+//! Friction is Coulomb's, one cone per contact point (not rapier's default single cone and twist
+//! per manifold), so the torque a pad resists comes from how its contact points spread. Contact
+//! recycling is off: a held object moves with the fingers, and recycled contacts would never be
+//! updated while the fingers sink into it.
 //!
 //! # The phases
 //!
@@ -47,9 +52,9 @@
 //! The object is held when, at the end of a phase: both fingers are within
 //! [`PhysicsParams::contact_tolerance_m`] of it (exact distances, not contact caches), it is
 //! farther than that from the table, its centre of mass has risen at least
-//! [`PhysicsParams::min_lift_fraction`] of the lift height above where it rested, and its centre
-//! of mass has moved at most [`PhysicsParams::max_slip_m`] in the gripper frame since the
-//! fingers closed. A trial succeeds when the object is held after the shake.
+//! [`PhysicsParams::min_lift_fraction`] of the lift height above where it rested, and, if
+//! [`PhysicsParams::max_slip_m`] is set, its centre of mass has moved at most that much in the
+//! gripper frame since the fingers closed. A trial succeeds when the object is held after the shake.
 //!
 //! rapier runs single-threaded here (the crate does not enable its `parallel` feature), so a
 //! trial is deterministic: the same inputs give the same outcome and the same final pose bits.

@@ -61,7 +61,10 @@ impl PhysicsObject {
         let hull = mesh
             .convex_hull()
             .map_err(|e| object_error(e.to_string()))?;
-        let convex = hull.signed_volume_m3() <= CONVEX_VOLUME_RATIO * unit_mass.volume_m3;
+        // A mesh that is not watertight has its hull's mass facts, so the volume test would
+        // call every such mesh convex (a scanned mug would lose its cavity): decompose it.
+        let convex = !unit_mass.from_convex_hull
+            && hull.signed_volume_m3() <= CONVEX_VOLUME_RATIO * unit_mass.volume_m3;
         let parts = if convex {
             vec![hull]
         } else {

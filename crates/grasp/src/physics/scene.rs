@@ -59,21 +59,17 @@ pub(crate) struct HandShape {
 }
 
 impl HandShape {
-    pub fn new(gripper: &Gripper, params: &PhysicsParams) -> Self {
+    pub fn new(gripper: &Gripper) -> Self {
         let t = gripper.finger_thickness_m;
         let half_w = gripper.finger_width_m / 2.0;
         let half_l = gripper.finger_length_m / 2.0;
         Self {
             finger: Cuboid::new(Vec3::new(t / 2.0, half_w, half_l)),
-            palm: Cuboid::new(Vec3::new(
-                gripper.max_opening_m / 2.0 + t,
-                half_w,
-                params.palm_depth_m / 2.0,
-            )),
+            palm: Cuboid::new(Vec3::from_array(gripper.palm_size_m) / 2.0),
             palm_center: Vec3::new(
                 0.0,
                 0.0,
-                -gripper.finger_length_m - params.palm_depth_m / 2.0,
+                -gripper.finger_length_m - gripper.palm_size_m[2] / 2.0,
             ),
             finger_open_x: (gripper.max_opening_m + t) / 2.0,
             finger_shut_x: (gripper.min_opening_m + t) / 2.0,
@@ -144,7 +140,7 @@ impl Scene {
         params: &PhysicsParams,
         force_n: f32,
     ) -> Hand {
-        let shape = HandShape::new(gripper, params);
+        let shape = HandShape::new(gripper);
         let gripper_groups = groups(GRIPPER_GROUP, TABLE_GROUP | OBJECT_GROUP);
         let world = &mut self.world;
         let (palm, _) = world.insert(
@@ -309,7 +305,7 @@ mod tests {
         let params = PhysicsParams::default();
         let on_table = Pose3::from_translation(Vec3::new(0.0, 0.0, 0.025));
         let scene = Scene::new(&object, &on_table, &params);
-        let shape = HandShape::new(&Gripper::default(), &params);
+        let shape = HandShape::new(&Gripper::default());
         let down = Rot3::from_rotation_x(std::f32::consts::PI);
         // Open Panda fingers: inner faces 4 cm either side of the closing line.
         let hits = |x: f32, z_end: f32| {
@@ -330,7 +326,7 @@ mod tests {
             finger_length_m: 0.03,
             ..Gripper::default()
         };
-        let short = HandShape::new(&short, &params);
+        let short = HandShape::new(&short);
         let pre = Pose3::from_parts(Vec3::new(0.0, 0.0, 0.09), down);
         assert!(scene.sweep_hits(&short, &pre, Vec3::new(0.0, 0.0, -0.08)));
     }

@@ -127,7 +127,7 @@ impl Trial<'_> {
         let Some(rest_com) = self.settle() else {
             return self.failure(FailureStage::Settle, 0.0);
         };
-        let shape = HandShape::new(gripper, self.params);
+        let shape = HandShape::new(gripper);
         if self.approach_hits(&shape, grasp) {
             return self.failure(FailureStage::Approach, 0.0);
         }
@@ -339,7 +339,7 @@ impl Trial<'_> {
             held: fingers_touch
                 && off_table
                 && lift_m >= p.min_lift_fraction * p.lift_height_m
-                && slip_m <= p.max_slip_m,
+                && p.max_slip_m.is_none_or(|max| slip_m <= max),
             lift_m,
             slip_m,
             slip_rad,

@@ -6,7 +6,9 @@
 //! - [`find_contacts`]: close the jaws along the closing line (two ray casts).
 //! - [`force_closure`]: the line between the contacts inside both friction cones.
 //! - [`contact_wrenches`] and [`ferrari_canny_l1`]: linearised cones and soft-finger torsion,
-//!   their 6-D convex hull (qhull, f64) and the distance from the origin to its boundary.
+//!   and the distance from the origin to the boundary of their 6-D convex hull (f64): from the
+//!   polar polytope's vertices, enumerated from the two-contact structure, with qhull
+//!   ([`wrench_set_epsilon`]) as fallback and reference.
 //! - [`grasp_quality`], [`robust_quality`], [`robust_qualities`]: one grasp nominally, under
 //!   [`RobustQualityParams`]' noise, and many grasps in parallel.
 
@@ -14,6 +16,7 @@ mod closure;
 mod contacts;
 mod ferrari_canny;
 mod params;
+mod polar;
 mod robust;
 mod wrench;
 

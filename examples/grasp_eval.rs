@@ -1,0 +1,198 @@
+//! Grasp analysis on real meshes: per object, the antipodal grasps found, the fraction that
+//! Dex-Net 2.0's robust label calls positive, and how that label agrees with physics (a rapier
+//! close-lift-shake trial per grasp): the confusion table of issue 4.
+//!
+//! cargo run --release --example grasp_eval -- [--n 100] [--seed 0] [--data ../shared/data/meshes]
+//!     [--json OUT.json]
+//!
+//! Meshes missing from the data folder are skipped with a note.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use clap::Parser;
+use mvgrasp::geometry::{LoadOptions, StablePoseParams, load_mesh_with, stable_poses};
+use mvgrasp::grasp::physics::{FailureStage, PhysicsParams};
+use mvgrasp::grasp::{AnalysisConfig, GraspObject, Gripper, analyse};
+use serde::Serialize;
+
+/// The real meshes of the evaluation (path under the data folder, scale to metres).
+const MESHES: [(&str, f32); 12] = [
+    ("ycb/meshes/003_cracker_box_textured.obj", 1.0),
+    ("ycb/meshes/004_sugar_box_textured.obj", 1.0),
+    ("ycb/meshes/005_tomato_soup_can_textured.obj", 1.0),
+    ("ycb/meshes/006_mustard_bottle_textured.obj", 1.0),
+    ("ycb/meshes/009_gelatin_box_textured.obj", 1.0),
+    ("ycb/meshes/010_potted_meat_can_textured.obj", 1.0),
+    ("dexnet/test/models/bar_clamp.obj", 1.0),
+    ("dexnet/meshes/example/box.obj", 1.0),
+    ("robosuite/objects/meshes/bottle.obj", 1.0),
+    ("robosuite/objects/meshes/can.stl", 1.0),
+    ("robosuite/objects/meshes/milk.stl", 1.0),
+    ("pybullet/objects/mug.urdf", 1.0),
+];
+
+/// Evaluate robust labels against physics on real meshes.
+#[derive(Parser, Debug)]
+struct Args {
+    /// Grasps sampled per object.
+    #[arg(long, default_value_t = 100)]
+    n: usize,
+    /// Seed of sampling, quality and physics.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// The shared mesh folder.
+    #[arg(long, default_value = "../shared/data/meshes")]
+    data: PathBuf,
+    /// Write every object's row as JSON here.
+    #[arg(long)]
+    json: Option<PathBuf>,
+}
+
+/// One object's figures.
+#[derive(Serialize, Default)]
+struct Row {
+    object: String,
+    stable_pose: usize,
+    tries: usize,
+    grasps: usize,
+    positives: usize,
+    /// [label +, held], [label +, failed], [label -, held], [label -, failed].
+    confusion: [usize; 4],
+    /// Failed trials by stage: approach, close, lift, shake, settle.
+    failures: [usize; 5],
+    seconds: f64,
+}
+
+fn main() -> ExitCode {
+    let args = Args::parse();
+    match run(&args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(message) => {
+            eprintln!("error: {message}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn run(args: &Args) -> Result<(), String> {
+    let config = AnalysisConfig {
+        sampling: mvgrasp::grasp::SamplingParams {
+            target_grasps: args.n,
+            max_tries: 40 * args.n,
+            ..Default::default()
+        },
+        physics: Some(PhysicsParams::default()),
+        ..AnalysisConfig::default()
+    };
+    let gripper = Gripper::default();
+    let mut rows = Vec::new();
+    println!(
+        "| object | pose | tries | grasps | robust + | +held | +failed | -held | -failed | agreement | failures (approach/close/lift/shake) | s |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    for (relative, scale) in MESHES {
+        let path = args.data.join(relative);
+        if !path.exists() {
+            eprintln!("skipping {} (not found)", path.display());
+            continue;
+        }
+        let started = Instant::now();
+        let options = LoadOptions {
+            scale,
+            ..Default::default()
+        };
+        let mesh = load_mesh_with(&path, &options).map_err(|e| e.to_string())?;
+        let poses = stable_poses(&mesh, &StablePoseParams::default()).map_err(|e| e.to_string())?;
+        let Some(pose_index) = poses.iter().position(|p| !p.marginal) else {
+            eprintln!("skipping {relative}: every stable pose is marginal");
+            continue;
+        };
+        let object = GraspObject::new(mesh).map_err(|e| e.to_string())?;
+        let analysis = analyse(
+            &object,
+            &poses[pose_index].table_from_object,
+            &gripper,
+            &config,
+            args.seed,
+        )
+        .map_err(|e| format!("{relative}: {e}"))?;
+        let mut row = Row {
+            object: relative.rsplit('/').next().unwrap_or(relative).to_string(),
+            stable_pose: pose_index,
+            tries: analysis.sampling.tries,
+            grasps: analysis.grasps.len(),
+            ..Row::default()
+        };
+        for g in &analysis.grasps {
+            row.positives += usize::from(g.robust_label);
+            let Some(outcome) = g.physics else { continue };
+            let cell = match (g.robust_label, outcome.success) {
+                (true, true) => 0,
+                (true, false) => 1,
+                (false, true) => 2,
+                (false, false) => 3,
+            };
+            row.confusion[cell] += 1;
+            if let Some(stage) = outcome.failed_at {
+                let index = match stage {
+                    FailureStage::Approach => 0,
+                    FailureStage::Close => 1,
+                    FailureStage::Lift => 2,
+                    FailureStage::Shake => 3,
+                    _ => 4,
+                };
+                row.failures[index] += 1;
+            }
+        }
+        row.seconds = started.elapsed().as_secs_f64();
+        print_row(&row);
+        rows.push(row);
+    }
+    let mut total = Row {
+        object: "all".into(),
+        ..Row::default()
+    };
+    for row in &rows {
+        total.tries += row.tries;
+        total.grasps += row.grasps;
+        total.positives += row.positives;
+        for i in 0..4 {
+            total.confusion[i] += row.confusion[i];
+        }
+        for i in 0..5 {
+            total.failures[i] += row.failures[i];
+        }
+        total.seconds += row.seconds;
+    }
+    print_row(&total);
+    if let Some(path) = &args.json {
+        let json = serde_json::to_string_pretty(&rows).map_err(|e| e.to_string())?;
+        std::fs::write(path, json).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    Ok(())
+}
+
+fn print_row(row: &Row) {
+    let [ph, pf, nh, nf] = row.confusion;
+    let judged = ph + pf + nh + nf;
+    let percent = |a: usize, b: usize| {
+        if b == 0 {
+            "-".to_string()
+        } else {
+            format!("{:.0}%", 100.0 * a as f64 / b as f64)
+        }
+    };
+    let [a, c, l, s, _] = row.failures;
+    println!(
+        "| {} | {} | {} | {} | {} | {ph} | {pf} | {nh} | {nf} | {} | {a}/{c}/{l}/{s} | {:.1} |",
+        row.object,
+        row.stable_pose,
+        row.tries,
+        row.grasps,
+        percent(row.positives, row.grasps),
+        percent(ph + nf, judged),
+        row.seconds
+    );
+}
