@@ -61,10 +61,11 @@ impl PhysicsObject {
         let hull = mesh
             .convex_hull()
             .map_err(|e| object_error(e.to_string()))?;
-        // A mesh that is not watertight has its hull's mass facts, so the volume test would
-        // call every such mesh convex (a scanned mug would lose its cavity): decompose it.
-        let convex = !unit_mass.from_convex_hull
-            && hull.signed_volume_m3() <= CONVEX_VOLUME_RATIO * unit_mass.volume_m3;
+        // A mesh that is not watertight has its hull's mass facts, so it is simulated as its hull
+        // too. Known cost: an open scan of a mug loses its cavity. Decomposing such scans instead
+        // (VHACD on an open surface) made the YCB mustard and robosuite bottle topple while
+        // settling in poses that are stable as meshes, which cost more agreement than it won.
+        let convex = hull.signed_volume_m3() <= CONVEX_VOLUME_RATIO * unit_mass.volume_m3;
         let parts = if convex {
             vec![hull]
         } else {
