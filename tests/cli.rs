@@ -135,3 +135,56 @@ fn objects_writes_meshes_and_a_manifest_the_same_bytes_twice() {
         .unwrap();
     assert_eq!(bad.status.code(), Some(2));
 }
+
+fn grasps(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_grasps"))
+        .args(args)
+        .output()
+        .expect("run grasps")
+}
+
+#[test]
+fn grasps_samples_scores_simulates_and_writes_the_same_json_twice() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |out: &std::path::Path| {
+        let output = grasps(&["--n", "12", "--out", out.to_str().unwrap()]);
+        assert!(
+            output.status.success(),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        std::fs::read_to_string(out.join("grasps.json")).unwrap()
+    };
+    let first = run(&dir.path().join("a"));
+    let again = run(&dir.path().join("b"));
+    assert_eq!(first, again, "same seed, same bytes");
+    let json: serde_json::Value = serde_json::from_str(&first).unwrap();
+    let list = json["analysis"]["grasps"].as_array().unwrap();
+    assert_eq!(list.len(), 12);
+    let mut previous = f64::INFINITY;
+    for g in list {
+        let robust = g["quality"]["robust_epsilon"].as_f64().unwrap();
+        assert!(robust <= previous, "sorted by robust epsilon");
+        previous = robust;
+        assert!(g["physics"]["success"].is_boolean());
+        // The grasp centre is above the table, in the world frame.
+        assert!(g["grasp"]["world_from_gripper"][2][3].as_f64().unwrap() > 0.0);
+    }
+}
+
+#[test]
+fn grasps_reports_bad_input_in_one_line_and_exits_2() {
+    for (args, needle) in [
+        (vec!["--gripper", "barrett"], "--gripper"),
+        (vec!["--pose", "99"], "--pose 99"),
+        (vec!["--mesh", "/nonexistent/x.obj"], "/nonexistent/x.obj"),
+    ] {
+        let output = grasps(&args);
+        assert_eq!(output.status.code(), Some(2), "{args:?}");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(
+            stderr.starts_with("error: ") && stderr.contains(needle),
+            "{stderr}"
+        );
+    }
+}
