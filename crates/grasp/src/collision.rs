@@ -9,13 +9,10 @@ use serde::{Deserialize, Serialize};
 use crate::gripper::Gripper;
 use crate::object::GraspObject;
 
-/// How collisions are checked.
+/// How collisions are checked (the approach sweep is the gripper's `approach_distance_m`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct CollisionParams {
-    /// The approach is checked too: the hand swept back along -z by this much from the grasp
-    /// (the pre-grasp pose; physics starts its approach at the same distance), metres.
-    pub approach_distance_m: f32,
     /// Shapes closer than this to the table count as touching it, metres.
     pub table_margin_m: f32,
 }
@@ -23,7 +20,6 @@ pub struct CollisionParams {
 impl Default for CollisionParams {
     fn default() -> Self {
         Self {
-            approach_distance_m: 0.08,
             table_margin_m: 0.002,
         }
     }
@@ -57,22 +53,19 @@ impl HandShapes {
     /// extended back along -z by `sweep_m` so that one test covers the straight approach.
     pub fn new(gripper: &Gripper, opening_m: f32, sweep_m: f32) -> Self {
         let opening = opening_m.clamp(gripper.min_opening_m, gripper.max_opening_m);
-        let sweep = sweep_m.max(0.0);
-        let t = gripper.finger_thickness_m;
-        let finger_len = gripper.finger_length_m + sweep;
-        let finger = Cuboid::new(Vec3::new(t, gripper.finger_width_m, finger_len) / 2.0);
-        let finger_z = -finger_len / 2.0;
-        let [px, py, pz] = gripper.palm_size_m;
-        let palm_len = pz + sweep;
-        let palm = Cuboid::new(Vec3::new(px, py, palm_len) / 2.0);
-        let palm_z = -gripper.finger_length_m - palm_len / 2.0;
-        let at = |x: f32, z: f32| Pose3::from_parts(Vec3::new(x, 0.0, z), Rot3::IDENTITY);
-        let finger_x = (opening + t) / 2.0;
+        let back = Vec3::new(0.0, 0.0, sweep_m.max(0.0) / 2.0);
+        let swept = |half: Vec3, center: Vec3| {
+            (
+                Cuboid::new(half + back),
+                Pose3::from_parts(center - back, Rot3::IDENTITY),
+            )
+        };
+        let finger = gripper.finger_half_extents();
         Self {
             boxes: [
-                (finger, at(-finger_x, finger_z)),
-                (finger, at(finger_x, finger_z)),
-                (palm, at(0.0, palm_z)),
+                swept(finger, gripper.finger_center(opening, -1.0)),
+                swept(finger, gripper.finger_center(opening, 1.0)),
+                swept(gripper.palm_half_extents(), gripper.palm_center()),
             ],
         }
     }
@@ -99,15 +92,10 @@ impl HandShapes {
         self.boxes
             .iter()
             .map(|(shape, gripper_from_box)| {
-                let pose = *world_from_gripper * *gripper_from_box;
-                let h = shape.half_extents;
-                let mut lowest = f32::INFINITY;
-                for corner in 0..8 {
-                    let sign = |bit: u32| if corner & bit == 0 { -1.0 } else { 1.0 };
-                    let local = Vec3::new(sign(1) * h.x, sign(2) * h.y, sign(4) * h.z);
-                    lowest = lowest.min(pose.transform_point(local).z);
-                }
-                lowest
+                shape
+                    .aabb(&(*world_from_gripper * *gripper_from_box))
+                    .mins
+                    .z
             })
             .fold(f32::INFINITY, f32::min)
     }
@@ -123,7 +111,7 @@ pub fn check_collision(
     table_from_object: Option<&Pose3>,
     params: &CollisionParams,
 ) -> Collision {
-    let hand = HandShapes::new(gripper, gripper.max_opening_m, params.approach_distance_m);
+    let hand = HandShapes::new(gripper, gripper.max_opening_m, gripper.approach_distance_m);
     let table = table_from_object.is_some_and(|table_from_object| {
         hand.lowest_z(&(*table_from_object * *object_from_gripper)) < params.table_margin_m
     });

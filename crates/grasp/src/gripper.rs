@@ -2,6 +2,7 @@
 
 use std::path::Path;
 
+use mvgrasp_geometry::Vec3;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{GraspError, Result};
@@ -11,7 +12,9 @@ use crate::error::{GraspError, Result};
 ///
 /// Collision geometry: two finger boxes (`finger_thickness_m` x `finger_width_m` x
 /// `finger_length_m`) spanning z in `[-finger_length_m, 0]` at x = +-(opening / 2 +
-/// thickness / 2), and a palm box of `palm_size_m` centred on the z axis behind them.
+/// thickness / 2), and a palm box of `palm_size_m` centred on the z axis behind them
+/// ([`Gripper::finger_center`], [`Gripper::palm_center`]). Collision checks and physics both
+/// bring the open hand in from `approach_distance_m` back along its approach.
 ///
 /// In a file (TOML or JSON) every field is optional and defaults to the Panda preset's, so
 /// `max_opening_m = 0.06` alone is a Panda with a narrower stroke.
@@ -35,6 +38,9 @@ pub struct Gripper {
     /// Palm box behind the fingers: extent along the closing axis (x), across it (y) and
     /// along the approach (z), metres.
     pub palm_size_m: [f32; 3],
+    /// The pre-grasp pose stands this far back along -z from the grasp; the open hand comes in
+    /// straight from there, metres.
+    pub approach_distance_m: f32,
 }
 
 /// The grippers mvgrasp knows by name.
@@ -109,7 +115,37 @@ impl Gripper {
             finger_thickness_m,
             force_limit_n,
             palm_size_m,
+            approach_distance_m: 0.08,
         }
+    }
+
+    /// Half extents of a finger box: thickness along x, width along y, length along z.
+    pub fn finger_half_extents(&self) -> Vec3 {
+        Vec3::new(
+            self.finger_thickness_m,
+            self.finger_width_m,
+            self.finger_length_m,
+        ) / 2.0
+    }
+
+    /// Gripper-frame centre of the finger on the `side` of +x (`1.0`) or -x (`-1.0`) when the
+    /// fingers stand `opening_m` apart.
+    pub fn finger_center(&self, opening_m: f32, side: f32) -> Vec3 {
+        Vec3::new(
+            side * (opening_m + self.finger_thickness_m) / 2.0,
+            0.0,
+            -self.finger_length_m / 2.0,
+        )
+    }
+
+    /// Half extents of the palm box.
+    pub fn palm_half_extents(&self) -> Vec3 {
+        Vec3::from_array(self.palm_size_m) / 2.0
+    }
+
+    /// Gripper-frame centre of the palm box, right behind the fingers.
+    pub fn palm_center(&self) -> Vec3 {
+        Vec3::new(0.0, 0.0, -self.finger_length_m - self.palm_size_m[2] / 2.0)
     }
 
     /// Reads a gripper from a file: `.toml` or `.json` with [`Gripper`]'s fields (missing ones
@@ -177,6 +213,7 @@ impl Gripper {
             ("palm_size_m[0]", self.palm_size_m[0]),
             ("palm_size_m[1]", self.palm_size_m[1]),
             ("palm_size_m[2]", self.palm_size_m[2]),
+            ("approach_distance_m", self.approach_distance_m),
             ("finger_length_m", self.finger_length_m),
             ("finger_width_m", self.finger_width_m),
             ("finger_thickness_m", self.finger_thickness_m),

@@ -92,10 +92,7 @@ impl SamplingParams {
         for (name, value) in [
             ("min_center_distance_m", self.min_center_distance_m),
             ("min_angle_rad", self.min_angle_rad),
-            (
-                "collision.approach_distance_m",
-                self.collision.approach_distance_m,
-            ),
+            ("collision.table_margin_m", self.collision.table_margin_m),
         ] {
             if !(value.is_finite() && value >= 0.0) {
                 return bad(name, value.to_string(), "a finite number >= 0");

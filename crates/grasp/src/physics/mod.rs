@@ -28,7 +28,7 @@
 //! 1. Settle: the object alone on the table for [`PhysicsParams::settle_time_s`]. If it moves
 //!    more than the settle tolerances the pose is not stable: [`FailureStage::Settle`].
 //! 2. Approach: the open gripper (fingers at the widest opening) moves along its approach from
-//!    [`PhysicsParams::pregrasp_distance_m`] back to the grasp pose. It is checked by an exact
+//!    the gripper's `approach_distance_m` back to the grasp pose. It is checked by an exact
 //!    swept-volume test (conservative advancement on exact distances from both fingers and the
 //!    palm to the table and the settled object), not stepped: coming within 0.1 mm of anything
 //!    on the way, or at either end, is [`FailureStage::Approach`]. A kinematic hand stepped

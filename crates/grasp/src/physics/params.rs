@@ -23,7 +23,6 @@ use crate::object::DEFAULT_DENSITY_KG_M3;
 /// | `settle_time_s` | 0.1 s | the object alone on the table |
 /// | `settle_tolerance_m` | 5 mm | the settling object may move this much |
 /// | `settle_tolerance_rad` | 0.1 rad | and turn this much |
-/// | `pregrasp_distance_m` | 0.08 m | start of the approach, back along -approach |
 /// | `finger_mass_kg` | 0.1 kg | each finger (gravity-free; the palm carries them) |
 /// | `closing_speed_m_s` | 0.15 m/s | each finger's speed while closing |
 /// | `closing_force_n` | `None` | each finger's force limit; `None` is the gripper's `force_limit_n` |
@@ -68,7 +67,6 @@ pub struct PhysicsParams {
     /// While settling, the object may turn at most this much, radians.
     pub settle_tolerance_rad: f32,
     /// Distance from the pre-grasp pose to the grasp pose along the approach, metres.
-    pub pregrasp_distance_m: f32,
     /// Mass of each finger, kilograms.
     pub finger_mass_kg: f32,
     /// Each finger's closing speed, metres per second.
@@ -126,7 +124,6 @@ impl Default for PhysicsParams {
             settle_time_s: 0.1,
             settle_tolerance_m: 0.005,
             settle_tolerance_rad: 0.1,
-            pregrasp_distance_m: 0.08,
             finger_mass_kg: 0.1,
             closing_speed_m_s: 0.15,
             closing_force_n: None,
@@ -171,7 +168,6 @@ impl PhysicsParams {
             ("contact_damping_ratio", self.contact_damping_ratio),
             ("settle_tolerance_m", self.settle_tolerance_m),
             ("settle_tolerance_rad", self.settle_tolerance_rad),
-            ("pregrasp_distance_m", self.pregrasp_distance_m),
             ("finger_mass_kg", self.finger_mass_kg),
             ("closing_speed_m_s", self.closing_speed_m_s),
             ("object_density_kg_m3", self.object_density_kg_m3),

@@ -60,21 +60,15 @@ pub(crate) struct HandShape {
 
 impl HandShape {
     pub fn new(gripper: &Gripper) -> Self {
-        let t = gripper.finger_thickness_m;
-        let half_w = gripper.finger_width_m / 2.0;
-        let half_l = gripper.finger_length_m / 2.0;
+        let open = gripper.finger_center(gripper.max_opening_m, 1.0);
         Self {
-            finger: Cuboid::new(Vec3::new(t / 2.0, half_w, half_l)),
-            palm: Cuboid::new(Vec3::from_array(gripper.palm_size_m) / 2.0),
-            palm_center: Vec3::new(
-                0.0,
-                0.0,
-                -gripper.finger_length_m - gripper.palm_size_m[2] / 2.0,
-            ),
-            finger_open_x: (gripper.max_opening_m + t) / 2.0,
-            finger_shut_x: (gripper.min_opening_m + t) / 2.0,
-            finger_z: -half_l,
-            thickness: t,
+            finger: Cuboid::new(gripper.finger_half_extents()),
+            palm: Cuboid::new(gripper.palm_half_extents()),
+            palm_center: gripper.palm_center(),
+            finger_open_x: open.x,
+            finger_shut_x: gripper.finger_center(gripper.min_opening_m, 1.0).x,
+            finger_z: open.z,
+            thickness: gripper.finger_thickness_m,
         }
     }
 

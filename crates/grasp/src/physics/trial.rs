@@ -128,7 +128,7 @@ impl Trial<'_> {
             return self.failure(FailureStage::Settle, 0.0);
         };
         let shape = HandShape::new(gripper);
-        if self.approach_hits(&shape, grasp) {
+        if self.approach_hits(&shape, grasp, gripper.approach_distance_m) {
             return self.failure(FailureStage::Approach, 0.0);
         }
         let grip = match self.close(grasp, gripper, rest_com) {
@@ -163,8 +163,8 @@ impl Trial<'_> {
     }
 
     /// Whether the open gripper touches anything on its way from the pre-grasp pose.
-    fn approach_hits(&self, shape: &HandShape, grasp: &Grasp) -> bool {
-        let travel = grasp.approach() * self.params.pregrasp_distance_m;
+    fn approach_hits(&self, shape: &HandShape, grasp: &Grasp, approach_distance_m: f32) -> bool {
+        let travel = grasp.approach() * approach_distance_m;
         let world_from_grasp = grasp.world_from_gripper;
         let pregrasp = Pose3::from_parts(
             world_from_grasp.translation - travel,
