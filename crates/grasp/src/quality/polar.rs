@@ -23,6 +23,7 @@
 //! ([`crate::quality::wrench_set_epsilon`]), the reference this is tested against; qhull is
 //! 10-20 times slower on these degenerate sets.
 
+use glam::DVec3;
 use mvgrasp_geometry::Vec3;
 
 use crate::quality::contacts::ContactPair;
@@ -88,7 +89,7 @@ pub(crate) fn two_contact_epsilon(
         // Two point contacts cannot resist a torque about the line through them.
         return Some(0.0);
     }
-    let com = to_f64(center_of_mass);
+    let com = center_of_mass.as_dvec3();
     let mut parts = Vec::with_capacity(2);
     for (contact, push) in contacts.contacts.iter().zip(contacts.push_directions()) {
         let inward = contact.inward_normal();
@@ -97,11 +98,11 @@ pub(crate) fn two_contact_epsilon(
             return Some(0.0);
         }
         let (t1, t2) = inward.any_orthonormal_pair();
-        let (n, t1, t2) = (to_f64(inward), to_f64(t1), to_f64(t2));
+        let (n, t1, t2) = (inward.as_dvec3(), t1.as_dvec3(), t2.as_dvec3());
         // Strictly inside the linearised cone: the push's tangential part, per unit normal
         // part, inside the regular k-gon of circumradius mu.
-        let d = to_f64(push);
-        let (p1, p2) = (dot(d, t1) / share, dot(d, t2) / share);
+        let d = push.as_dvec3();
+        let (p1, p2) = (d.dot(t1) / share, d.dot(t2) / share);
         let inradius = mu * (std::f64::consts::PI / k as f64).cos();
         let inside = (0..k).all(|m| {
             let angle = std::f64::consts::PI * (2 * m + 1) as f64 / k as f64;
@@ -112,24 +113,16 @@ pub(crate) fn two_contact_epsilon(
             // a line outside a cone), but the polar may be unbounded: leave it to qhull.
             return None;
         }
-        let arm = sub(to_f64(contact.point), com);
-        let wrench_row = |v: [f64; 3], scale: f64, rhs: f64| -> Row {
-            let t = cross(arm, v);
-            [
-                scale * v[0],
-                scale * v[1],
-                scale * v[2],
-                scale * t[0] * inv_scale,
-                scale * t[1] * inv_scale,
-                scale * t[2] * inv_scale,
-                rhs,
-            ]
+        let arm = contact.point.as_dvec3() - com;
+        let wrench_row = |v: DVec3, scale: f64, rhs: f64| -> Row {
+            let f = scale * v;
+            let t = arm.cross(f) * inv_scale;
+            [f.x, f.y, f.z, t.x, t.y, t.z, rhs]
         };
         let cone = (0..k)
             .map(|j| {
                 let (sin, cos) = (std::f64::consts::TAU * j as f64 / k as f64).sin_cos();
-                let f: [f64; 3] = std::array::from_fn(|i| n[i] + mu * (cos * t1[i] + sin * t2[i]));
-                wrench_row(f, share, 1.0)
+                wrench_row(n + mu * (cos * t1 + sin * t2), share, 1.0)
             })
             .collect();
         let apex = [
@@ -138,8 +131,8 @@ pub(crate) fn two_contact_epsilon(
             wrench_row(t2, 1.0, 0.0),
         ];
         let torsion = [1.0, -1.0].map(|sign| {
-            let m = sign * share * tau;
-            [0.0, 0.0, 0.0, m * n[0], m * n[1], m * n[2], 1.0]
+            let m = n * (sign * share * tau);
+            [0.0, 0.0, 0.0, m.x, m.y, m.z, 1.0]
         });
         parts.push(ContactRows {
             cone,
@@ -251,26 +244,6 @@ fn solve(rows: &mut [Row]) -> Option<[f64; WRENCH_DIM]> {
         y[col] = (row[WRENCH_DIM] - known) / row[col];
     }
     y.iter().all(|v| v.is_finite()).then_some(y)
-}
-
-fn to_f64(v: Vec3) -> [f64; 3] {
-    [f64::from(v.x), f64::from(v.y), f64::from(v.z)]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 #[cfg(test)]

@@ -151,47 +151,29 @@ pub(crate) fn push_wrenches(
 ) {
     let mu = f64::from(friction_coef);
     let inv_scale = 1.0 / f64::from(torque_scale_m).max(f64::MIN_POSITIVE);
-    let com = to_f64(center_of_mass);
+    let com = center_of_mass.as_dvec3();
     let faces = params.num_cone_faces;
     let torsion = params.torsion_per_newton(friction_coef) * inv_scale;
     for (contact, push) in contacts.contacts.iter().zip(contacts.push_directions()) {
         let inward = contact.inward_normal();
         let normal_share = f64::from(push.dot(inward)).max(0.0);
         let (t1, t2) = inward.any_orthonormal_pair();
-        let (n, t1, t2) = (to_f64(inward), to_f64(t1), to_f64(t2));
-        let arm = sub(to_f64(contact.point), com);
+        let (n, t1, t2) = (inward.as_dvec3(), t1.as_dvec3(), t2.as_dvec3());
+        let arm = contact.point.as_dvec3() - com;
         for j in 0..faces {
             let angle = std::f64::consts::TAU * j as f64 / faces as f64;
             let (sin, cos) = angle.sin_cos();
-            let force: [f64; 3] =
-                std::array::from_fn(|k| normal_share * (n[k] + mu * (cos * t1[k] + sin * t2[k])));
-            let torque = cross(arm, force);
-            out.extend_from_slice(&force);
-            out.extend(torque.iter().map(|t| t * inv_scale));
+            let force = normal_share * (n + mu * (cos * t1 + sin * t2));
+            out.extend_from_slice(&force.to_array());
+            out.extend_from_slice(&(arm.cross(force) * inv_scale).to_array());
         }
         if params.soft_fingers {
             for sign in [1.0, -1.0] {
                 out.extend_from_slice(&[0.0; 3]);
-                out.extend(n.iter().map(|nk| sign * normal_share * torsion * nk));
+                out.extend_from_slice(&(n * (sign * normal_share * torsion)).to_array());
             }
         }
     }
-}
-
-fn to_f64(v: Vec3) -> [f64; 3] {
-    [f64::from(v.x), f64::from(v.y), f64::from(v.z)]
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 #[cfg(test)]
