@@ -12,25 +12,25 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use clap::Parser;
-use mvgrasp::geometry::{LoadOptions, StablePoseParams, load_mesh_with, stable_poses};
-use mvgrasp::grasp::physics::{FailureStage, PhysicsParams};
+use mvgrasp::geometry::{StablePoseParams, load_mesh, stable_poses};
+use mvgrasp::grasp::physics::{PhysicsParams, StageCounts};
 use mvgrasp::grasp::{AnalysisConfig, GraspObject, Gripper, analyse};
 use serde::Serialize;
 
-/// The real meshes of the evaluation (path under the data folder, scale to metres).
-const MESHES: [(&str, f32); 12] = [
-    ("ycb/meshes/003_cracker_box_textured.obj", 1.0),
-    ("ycb/meshes/004_sugar_box_textured.obj", 1.0),
-    ("ycb/meshes/005_tomato_soup_can_textured.obj", 1.0),
-    ("ycb/meshes/006_mustard_bottle_textured.obj", 1.0),
-    ("ycb/meshes/009_gelatin_box_textured.obj", 1.0),
-    ("ycb/meshes/010_potted_meat_can_textured.obj", 1.0),
-    ("dexnet/test/models/bar_clamp.obj", 1.0),
-    ("dexnet/meshes/example/box.obj", 1.0),
-    ("robosuite/objects/meshes/bottle.obj", 1.0),
-    ("robosuite/objects/meshes/can.stl", 1.0),
-    ("robosuite/objects/meshes/milk.stl", 1.0),
-    ("pybullet/objects/mug.urdf", 1.0),
+/// The real meshes of the evaluation (paths under the data folder; all in metres).
+const MESHES: [&str; 12] = [
+    "ycb/meshes/003_cracker_box_textured.obj",
+    "ycb/meshes/004_sugar_box_textured.obj",
+    "ycb/meshes/005_tomato_soup_can_textured.obj",
+    "ycb/meshes/006_mustard_bottle_textured.obj",
+    "ycb/meshes/009_gelatin_box_textured.obj",
+    "ycb/meshes/010_potted_meat_can_textured.obj",
+    "dexnet/test/models/bar_clamp.obj",
+    "dexnet/meshes/example/box.obj",
+    "robosuite/objects/meshes/bottle.obj",
+    "robosuite/objects/meshes/can.stl",
+    "robosuite/objects/meshes/milk.stl",
+    "pybullet/objects/mug.urdf",
 ];
 
 /// Evaluate robust labels against physics on real meshes.
@@ -60,20 +60,13 @@ struct Row {
     positives: usize,
     /// [label +, held], [label +, failed], [label -, held], [label -, failed].
     confusion: [usize; 4],
-    /// Failed trials by stage: approach, close, lift, shake, settle.
-    failures: [usize; 5],
+    /// Failed trials by stage.
+    failures: StageCounts,
     seconds: f64,
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
-    match run(&args) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(message) => {
-            eprintln!("error: {message}");
-            ExitCode::from(2)
-        }
-    }
+    mvgrasp::cli::exit(run(&Args::parse()))
 }
 
 fn run(args: &Args) -> Result<(), String> {
@@ -89,21 +82,17 @@ fn run(args: &Args) -> Result<(), String> {
     let gripper = Gripper::default();
     let mut rows = Vec::new();
     println!(
-        "| object | pose | tries | grasps | robust + | +held | +failed | -held | -failed | agreement | failures (approach/close/lift/shake) | s |"
+        "| object | pose | tries | grasps | robust + | +held | +failed | -held | -failed | agreement | failures (settle/approach/close/lift/shake) | s |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
-    for (relative, scale) in MESHES {
+    for relative in MESHES {
         let path = args.data.join(relative);
         if !path.exists() {
             eprintln!("skipping {} (not found)", path.display());
             continue;
         }
         let started = Instant::now();
-        let options = LoadOptions {
-            scale,
-            ..Default::default()
-        };
-        let mesh = load_mesh_with(&path, &options).map_err(|e| e.to_string())?;
+        let mesh = load_mesh(&path).map_err(|e| e.to_string())?;
         let poses = stable_poses(&mesh, &StablePoseParams::default()).map_err(|e| e.to_string())?;
         let Some(pose_index) = poses.iter().position(|p| !p.marginal) else {
             eprintln!("skipping {relative}: every stable pose is marginal");
@@ -136,14 +125,7 @@ fn run(args: &Args) -> Result<(), String> {
             };
             row.confusion[cell] += 1;
             if let Some(stage) = outcome.failed_at {
-                let index = match stage {
-                    FailureStage::Approach => 0,
-                    FailureStage::Close => 1,
-                    FailureStage::Lift => 2,
-                    FailureStage::Shake => 3,
-                    _ => 4,
-                };
-                row.failures[index] += 1;
+                row.failures.count(stage);
             }
         }
         row.seconds = started.elapsed().as_secs_f64();
@@ -161,9 +143,7 @@ fn run(args: &Args) -> Result<(), String> {
         for i in 0..4 {
             total.confusion[i] += row.confusion[i];
         }
-        for i in 0..5 {
-            total.failures[i] += row.failures[i];
-        }
+        total.failures += row.failures;
         total.seconds += row.seconds;
     }
     print_row(&total);
@@ -184,15 +164,20 @@ fn print_row(row: &Row) {
             format!("{:.0}%", 100.0 * a as f64 / b as f64)
         }
     };
-    let [a, c, l, s, _] = row.failures;
+    let f = &row.failures;
     println!(
-        "| {} | {} | {} | {} | {} | {ph} | {pf} | {nh} | {nf} | {} | {a}/{c}/{l}/{s} | {:.1} |",
+        "| {} | {} | {} | {} | {} | {ph} | {pf} | {nh} | {nf} | {} | {}/{}/{}/{}/{} | {:.1} |",
         row.object,
         row.stable_pose,
         row.tries,
         row.grasps,
         percent(row.positives, row.grasps),
         percent(ph + nf, judged),
+        f.settle,
+        f.approach,
+        f.close,
+        f.lift,
+        f.shake,
         row.seconds
     );
 }

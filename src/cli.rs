@@ -1,9 +1,34 @@
-//! Pieces the command-line tools share: choosing the object (a mesh file or a built-in one).
+//! Pieces the command-line tools share: choosing the object (a mesh file or a built-in one),
+//! and the exit convention (a user error is one `error: ...` line and exit code 2).
 
 use std::path::PathBuf;
+use std::process::ExitCode;
 
 use mvgrasp_geometry::objects::{Category, generate};
 use mvgrasp_geometry::{LoadOptions, TriangleMesh, load_mesh_with};
+
+/// An object chosen on the command line.
+#[derive(Debug, Clone)]
+pub struct LoadedObject {
+    /// For people: the file stem, or the built-in name and its seed.
+    pub display_name: String,
+    /// For file names: the file stem, or the built-in name.
+    pub name: String,
+    /// The mesh, metres.
+    pub mesh: TriangleMesh,
+}
+
+/// The exit of a command whose `run` gave `result`: success, or the message on one
+/// `error: ...` line and exit code 2.
+pub fn exit(result: Result<(), String>) -> ExitCode {
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(message) => {
+            eprintln!("error: {message}");
+            ExitCode::from(2)
+        }
+    }
+}
 
 /// Which object a command works on: `--mesh PATH [--scale S]`, or a built-in object
 /// (`--category`, `--index`, `--seed`; the default is the mug, index 0, seed 0).
@@ -27,13 +52,12 @@ pub struct ObjectArgs {
 }
 
 impl ObjectArgs {
-    /// The object's display name (the file stem, or the built-in name and seed), a short name
-    /// for files, and its mesh.
+    /// The chosen object.
     ///
     /// # Errors
     /// A one-line message for the user: the loader's error (naming the file) or a bad
     /// `--category`.
-    pub fn load(&self) -> Result<(String, String, TriangleMesh), String> {
+    pub fn load(&self) -> Result<LoadedObject, String> {
         match &self.mesh {
             Some(path) => {
                 let options = LoadOptions {
@@ -44,7 +68,11 @@ impl ObjectArgs {
                 let stem = path
                     .file_stem()
                     .map_or("mesh".into(), |s| s.to_string_lossy().into_owned());
-                Ok((stem.clone(), stem, mesh))
+                Ok(LoadedObject {
+                    display_name: stem.clone(),
+                    name: stem,
+                    mesh,
+                })
             }
             None => {
                 let category: Category = self
@@ -53,11 +81,11 @@ impl ObjectArgs {
                     .map_err(|e| format!("--category: {e}"))?;
                 let object =
                     generate(category, self.index, self.seed).map_err(|e| e.to_string())?;
-                Ok((
-                    format!("{} (built-in, seed {})", object.name, self.seed),
-                    object.name.clone(),
-                    object.mesh,
-                ))
+                Ok(LoadedObject {
+                    display_name: format!("{} (built-in, seed {})", object.name, self.seed),
+                    name: object.name,
+                    mesh: object.mesh,
+                })
             }
         }
     }

@@ -23,9 +23,9 @@ use serde::Serialize;
 struct Args {
     #[command(flatten)]
     object: ObjectArgs,
-    /// Grasps to sample.
-    #[arg(long, default_value_t = 100)]
-    n: usize,
+    /// Grasps to sample (default: the config's `sampling.target_grasps`, 100).
+    #[arg(long)]
+    n: Option<usize>,
     /// Gripper: a preset (panda, yumi, robotiq_2f_85) or a .toml/.json file.
     #[arg(long, default_value = "panda")]
     gripper: String,
@@ -48,14 +48,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
-    match run(&args) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(message) => {
-            eprintln!("error: {message}");
-            ExitCode::from(2)
-        }
-    }
+    mvgrasp::cli::exit(run(&Args::parse()))
 }
 
 fn load_gripper(spec: &str) -> Result<Gripper, String> {
@@ -78,8 +71,10 @@ fn load_config(args: &Args) -> Result<AnalysisConfig, String> {
             ..AnalysisConfig::default()
         },
     };
-    config.sampling.target_grasps = args.n;
-    config.sampling.max_tries = config.sampling.max_tries.max(40 * args.n);
+    if let Some(n) = args.n {
+        config.sampling.target_grasps = n;
+        config.sampling.max_tries = config.sampling.max_tries.max(40 * n);
+    }
     if args.no_physics {
         config.physics = None;
     }
@@ -103,8 +98,10 @@ fn run(args: &Args) -> Result<(), String> {
     let started = Instant::now();
     let gripper = load_gripper(&args.gripper)?;
     let config = load_config(args)?;
-    let (name, short_name, mesh) = args.object.load()?;
-    let poses = stable_poses(&mesh, &StablePoseParams::default()).map_err(|e| e.to_string())?;
+    let loaded = args.object.load()?;
+    let name = &loaded.display_name;
+    let poses =
+        stable_poses(&loaded.mesh, &StablePoseParams::default()).map_err(|e| e.to_string())?;
     let pose_index = match args.pose {
         Some(k) if k < poses.len() => k,
         Some(k) => {
@@ -121,7 +118,7 @@ fn run(args: &Args) -> Result<(), String> {
         })?,
     };
     let pose = &poses[pose_index];
-    let object = GraspObject::new(mesh).map_err(|e| e.to_string())?;
+    let object = GraspObject::new(loaded.mesh).map_err(|e| e.to_string())?;
     let analysis = analyse(
         &object,
         &pose.table_from_object,
@@ -144,7 +141,7 @@ fn run(args: &Args) -> Result<(), String> {
     std::fs::create_dir_all(&args.out)
         .map_err(|e| format!("{}: cannot create: {e}", args.out.display()))?;
     let output = Output {
-        object: &short_name,
+        object: &loaded.name,
         gripper: &gripper,
         stable_pose: pose_index,
         stable_pose_probability: pose.probability,
@@ -193,8 +190,10 @@ fn print_table(analysis: &mvgrasp::grasp::Analysis) {
                 100.0 * p.probability,
                 p.trials
             ),
-            (Some(o), None) if o.success => "held".into(),
-            (Some(o), None) => format!("failed ({:?})", o.failed_at),
+            (Some(o), None) => match o.failed_at {
+                None => "held".into(),
+                Some(stage) => format!("failed ({})", stage.name()),
+            },
             _ => "-".into(),
         };
         println!(

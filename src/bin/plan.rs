@@ -24,25 +24,19 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
-    match run(&args) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(message) => {
-            eprintln!("error: {message}");
-            ExitCode::from(2)
-        }
-    }
+    mvgrasp::cli::exit(run(&Args::parse()))
 }
 
 fn run(args: &Args) -> Result<(), String> {
     let preset: IntrinsicsPreset = args.camera.parse().map_err(|e| format!("--camera: {e}"))?;
-    let (name, _, mesh) = args.object.load()?;
+    let object = args.object.load()?;
     let params = ReportParams {
         intrinsics: Intrinsics::preset(preset),
         views_seed: args.object.seed,
         ..Default::default()
     };
-    let report = ObjectReport::describe(&name, &mesh, &params).map_err(|e| e.to_string())?;
+    let report = ObjectReport::describe(&object.display_name, &object.mesh, &params)
+        .map_err(|e| e.to_string())?;
     if args.json {
         let json = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
         println!("{json}");

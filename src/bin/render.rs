@@ -50,13 +50,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    match run(&Args::parse()) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(message) => {
-            eprintln!("error: {message}");
-            ExitCode::from(2)
-        }
-    }
+    mvgrasp::cli::exit(run(&Args::parse()))
 }
 
 fn run(args: &Args) -> Result<(), String> {

@@ -52,7 +52,11 @@ fn run() -> Result<(), String> {
         let object = GraspObject::new(mesh).map_err(|e| e.to_string())?;
         let physics_object = PhysicsObject::from_grasp_object(&object, &Default::default())
             .map_err(|e| e.to_string())?;
-        for n in [1, threads] {
+        let mut thread_counts = vec![1];
+        if threads > 1 {
+            thread_counts.push(threads);
+        }
+        for n in thread_counts {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(n)
                 .build()
@@ -66,9 +70,6 @@ fn run() -> Result<(), String> {
                 row.trials_per_s,
                 row.median_trial_ms
             );
-            if n == threads {
-                break;
-            }
         }
     }
     Ok(())

@@ -100,13 +100,14 @@ pub fn analyse(
         &config.quality,
         grasp_seed(seed, 1),
     )?;
-    let physics_object = match &config.physics {
-        Some(_) => Some(PhysicsObject::from_grasp_object(
-            object,
-            &config.decomposition,
-        )?),
-        None => None,
-    };
+    let physics = config
+        .physics
+        .as_ref()
+        .map(|params| {
+            PhysicsObject::from_grasp_object(object, &config.decomposition)
+                .map(|body| (params, body))
+        })
+        .transpose()?;
     let physics_seed = grasp_seed(seed, 2);
     let mut grasps = sampling
         .grasps
@@ -118,8 +119,8 @@ pub fn analyse(
                 world_from_gripper: *table_from_object * sampled.grasp.world_from_gripper,
                 width_m: sampled.grasp.width_m,
             };
-            let (physics, physics_success) = match (&config.physics, &physics_object) {
-                (Some(params), Some(body)) => {
+            let (physics, physics_success) = match &physics {
+                Some((params, body)) => {
                     let nominal = simulate_grasp(body, table_from_object, &grasp, gripper, params)?;
                     let perturbed = if config.physics_trials > 0 {
                         Some(success_probability(
@@ -137,7 +138,7 @@ pub fn analyse(
                     };
                     (Some(nominal), perturbed)
                 }
-                _ => (None, None),
+                None => (None, None),
             };
             Ok(AnalysedGrasp {
                 grasp,

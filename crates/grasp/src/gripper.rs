@@ -166,25 +166,24 @@ impl Gripper {
             .extension()
             .and_then(|e| e.to_str())
             .unwrap_or_default();
-        let names_itself = match extension {
-            "toml" => toml::from_str::<toml::Table>(&text).is_ok_and(|t| t.contains_key("name")),
-            _ => serde_json::from_str::<serde_json::Value>(&text)
-                .is_ok_and(|v| v.get("name").is_some()),
-        };
-        let mut gripper: Gripper = match extension {
-            "toml" => toml::from_str(&text).map_err(|e| fail(e.to_string()))?,
-            "json" if text.contains("\"max_width\"") => {
-                let dexnet: DexNetParams =
-                    serde_json::from_str(&text).map_err(|e| fail(e.to_string()))?;
-                dexnet.into_gripper()
-            }
-            "json" => serde_json::from_str(&text).map_err(|e| fail(e.to_string()))?,
-            other => {
-                return Err(fail(format!(
-                    "unknown extension {other:?}: expected .toml or .json"
-                )));
-            }
-        };
+        // One parse into a JSON value, whatever the format; its keys say what kind of file it is.
+        let value: serde_json::Value = match extension {
+            "toml" => toml::from_str::<toml::Table>(&text)
+                .map_err(|e| e.to_string())
+                .and_then(|table| serde_json::to_value(table).map_err(|e| e.to_string())),
+            "json" => serde_json::from_str(&text).map_err(|e| e.to_string()),
+            other => Err(format!(
+                "unknown extension {other:?}: expected .toml or .json"
+            )),
+        }
+        .map_err(fail)?;
+        let names_itself = value.get("name").is_some();
+        let mut gripper = if value.get("max_width").is_some() {
+            serde_json::from_value::<DexNetParams>(value).map(DexNetParams::into_gripper)
+        } else {
+            serde_json::from_value::<Gripper>(value)
+        }
+        .map_err(|e| fail(e.to_string()))?;
         if !names_itself {
             gripper.name = path
                 .file_stem()

@@ -19,7 +19,6 @@ pub struct GraspObject {
     caster: RayCaster,
     mass: MassFacts,
     torque_scale_m: f32,
-    watertight: bool,
 }
 
 impl GraspObject {
@@ -62,13 +61,11 @@ impl GraspObject {
             .iter()
             .map(|v| v.distance(mass.center_of_mass))
             .fold(0.0f32, f32::max);
-        let watertight = mesh.is_watertight();
         Ok(Self {
             mesh,
             caster,
             mass,
             torque_scale_m,
-            watertight,
         })
     }
 
@@ -101,7 +98,8 @@ impl GraspObject {
 
     /// Whether the mesh bounds a solid (else mass facts come from the convex hull).
     pub fn is_watertight(&self) -> bool {
-        self.watertight
+        // Mass facts come from the convex hull exactly when the mesh is not watertight.
+        !self.mass.from_convex_hull
     }
 
     /// The file the mesh came from (empty for generated meshes).

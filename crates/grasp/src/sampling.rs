@@ -287,15 +287,15 @@ fn try_axis(
     if width < 1e-4 || !gripper.fits(width) {
         return TryOutcome::Width;
     }
-    let center = (p1 + far.point) / 2.0;
     let [y0, z0] = perpendiculars(axis);
-    let frame = |angle: f32| {
+    // The gripper at `center`, approaching at `angle` about the closing axis.
+    let frame = |center: Vec3, angle: f32| {
         let (s, c) = angle.sin_cos();
         let z = z0 * c + y0 * s;
         let y = z.cross(axis);
         Pose3::from_parts(center, Rot3::from_mat3(&Mat3::from_cols(axis, y, z)))
     };
-    let Some(contacts) = find_contacts(object, &frame(0.0), gripper) else {
+    let Some(contacts) = find_contacts(object, &frame((p1 + far.point) / 2.0, 0.0), gripper) else {
         return TryOutcome::NoContacts;
     };
     // `find_contacts` refuses mu <= 0, which `validate` already did.
@@ -310,8 +310,7 @@ fn try_axis(
     let mut free = Vec::with_capacity(k);
     let mut colliding = 0;
     for i in 0..k {
-        let mut pose = frame(offset + TAU * i as f32 / k as f32);
-        pose.translation = center;
+        let pose = frame(center, offset + TAU * i as f32 / k as f32);
         let collision =
             check_collision(object, gripper, &pose, table_from_object, &params.collision);
         if collision.is_free() {

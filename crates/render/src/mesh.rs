@@ -75,14 +75,10 @@ pub(crate) fn expand(meshes: &[MeshInput<'_>]) -> Result<Expanded> {
     }
     let vertices: usize = meshes.iter().map(|m| 3 * m.indices.len()).sum();
     let mut bytes = Vec::with_capacity(vertices * VERTEX_BYTES);
-    let front = meshes.iter().filter(|m| m.sides == Sides::Front);
-    let both = meshes.iter().filter(|m| m.sides == Sides::Both);
-    let front_vertices = meshes
-        .iter()
-        .filter(|m| m.sides == Sides::Front)
-        .map(|m| 3 * m.indices.len())
-        .sum();
-    for mesh in front.chain(both) {
+    let (front, both): (Vec<&MeshInput<'_>>, Vec<_>) =
+        meshes.iter().partition(|m| m.sides == Sides::Front);
+    let front_vertices = front.iter().map(|m| 3 * m.indices.len()).sum();
+    for mesh in front.into_iter().chain(both) {
         let world: Vec<[f32; 3]> = mesh
             .positions
             .iter()

@@ -175,8 +175,10 @@ impl PhysicsParams {
             ("lift_duration_s", self.lift_duration_s),
             ("shake_frequency_hz", self.shake_frequency_hz),
             ("contact_tolerance_m", self.contact_tolerance_m),
-            ("max_slip_m", self.max_slip_m.unwrap_or(1.0)),
-        ] {
+        ]
+        .into_iter()
+        .chain(self.max_slip_m.map(|max| ("max_slip_m", max)))
+        {
             if !(value.is_finite() && value > 0.0) {
                 return bad(name, value, "a finite number > 0");
             }

@@ -44,7 +44,8 @@ pub struct StageCounts {
 }
 
 impl StageCounts {
-    fn count(&mut self, stage: FailureStage) {
+    /// Counts one failure at `stage`.
+    pub fn count(&mut self, stage: FailureStage) {
         let slot = match stage {
             FailureStage::Settle => &mut self.settle,
             FailureStage::Approach => &mut self.approach,
@@ -53,6 +54,16 @@ impl StageCounts {
             FailureStage::Shake => &mut self.shake,
         };
         *slot += 1;
+    }
+}
+
+impl std::ops::AddAssign for StageCounts {
+    fn add_assign(&mut self, other: Self) {
+        self.settle += other.settle;
+        self.approach += other.approach;
+        self.close += other.close;
+        self.lift += other.lift;
+        self.shake += other.shake;
     }
 }
 

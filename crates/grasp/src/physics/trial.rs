@@ -32,6 +32,19 @@ pub enum FailureStage {
     Shake,
 }
 
+impl FailureStage {
+    /// The stage's name, as in JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Settle => "settle",
+            Self::Approach => "approach",
+            Self::Close => "close",
+            Self::Lift => "lift",
+            Self::Shake => "shake",
+        }
+    }
+}
+
 /// What happened in one trial.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PhysicsOutcome {
