@@ -13,7 +13,9 @@ pub mod pose_as_matrix;
 
 pub use camera::{Camera, Intrinsics, IntrinsicsPreset, read_tf};
 pub use error::{GeometryError, Result};
-pub use mesh::{LoadOptions, TriangleMesh, UrdfGeometryKind, load_mesh, load_mesh_with, write_obj};
+pub use mesh::{
+    LoadOptions, TriangleMesh, UrdfGeometryKind, UrdfModel, load_mesh, load_mesh_with, write_obj,
+};
 pub use objects::{Category, GeneratedObject, MarchingParams, ObjectSpec, default_object};
 /// The math types of every public API: parry's (glam 0.33 through glamx), f32, metres.
 pub use parry3d::math::{Mat3, Pose3, Rot3, Vec3};

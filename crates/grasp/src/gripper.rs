@@ -149,8 +149,9 @@ impl Gripper {
     }
 
     /// Reads a gripper from a file: `.toml` or `.json` with [`Gripper`]'s fields (missing ones
-    /// are the Panda's), or Dex-Net's `params.json` (`min_width`, `max_width`, `force_limit`,
-    /// `finger_radius`; the other dimensions are the Panda's), then validates it.
+    /// are the Panda's), Dex-Net's `params.json` (`min_width`, `max_width`, `force_limit`,
+    /// `finger_radius`; the other dimensions are the Panda's), or a `.urdf` measured with the
+    /// default [`crate::UrdfGripperSpec`] ([`Gripper::from_urdf`]), then validates it.
     ///
     /// # Errors
     /// [`GraspError::GripperFile`] naming the file when it cannot be read or parsed, has an
@@ -161,11 +162,14 @@ impl Gripper {
             detail,
             path: path.to_path_buf(),
         };
-        let text = std::fs::read_to_string(path).map_err(|e| fail(e.to_string()))?;
         let extension = path
             .extension()
             .and_then(|e| e.to_str())
             .unwrap_or_default();
+        if extension == "urdf" {
+            return Self::from_urdf(path, &crate::UrdfGripperSpec::default()).map(|u| u.gripper);
+        }
+        let text = std::fs::read_to_string(path).map_err(|e| fail(e.to_string()))?;
         // One parse into a JSON value, whatever the format; its keys say what kind of file it is.
         let value: serde_json::Value = match extension {
             "toml" => toml::from_str::<toml::Table>(&text)
@@ -173,7 +177,7 @@ impl Gripper {
                 .and_then(|table| serde_json::to_value(table).map_err(|e| e.to_string())),
             "json" => serde_json::from_str(&text).map_err(|e| e.to_string()),
             other => Err(format!(
-                "unknown extension {other:?}: expected .toml or .json"
+                "unknown extension {other:?}: expected .toml, .json or .urdf"
             )),
         }
         .map_err(fail)?;

@@ -8,6 +8,7 @@ mod validate;
 
 pub use load::{LoadOptions, UrdfGeometryKind, load_mesh, load_mesh_with};
 pub use obj::write_obj;
+pub use urdf::UrdfModel;
 
 use std::path::{Path, PathBuf};
 
