@@ -90,3 +90,85 @@ impl ObjectArgs {
         }
     }
 }
+
+/// Many objects for a dataset: mesh files and folders, or the built-in library.
+#[derive(clap::Args, Debug, Clone)]
+pub struct LibraryArgs {
+    /// Mesh files (OBJ, STL, URDF; metres) or folders searched for them. Default: the built-in
+    /// object library.
+    #[arg(long)]
+    pub mesh: Vec<PathBuf>,
+    /// Built-in objects per category (when no --mesh is given).
+    #[arg(long, default_value_t = 1)]
+    pub per_category: u32,
+    /// Built-in categories, comma-separated (default: all).
+    #[arg(long, value_delimiter = ',')]
+    pub categories: Vec<Category>,
+    /// Seed of the built-in objects' shapes.
+    #[arg(long, default_value_t = 0)]
+    pub library_seed: u64,
+}
+
+impl LibraryArgs {
+    /// The objects, in a fixed order: the library by category then index, or the files as
+    /// given with each folder's meshes sorted by path.
+    ///
+    /// # Errors
+    /// A message naming a path that does not exist or a folder with no mesh.
+    pub fn sources(&self) -> Result<Vec<crate::dataset::ObjectSource>, String> {
+        use crate::dataset::ObjectSource;
+        if self.mesh.is_empty() {
+            let categories = if self.categories.is_empty() {
+                Category::ALL.to_vec()
+            } else {
+                self.categories.clone()
+            };
+            return Ok(categories
+                .into_iter()
+                .flat_map(|category| {
+                    (0..self.per_category).map(move |index| {
+                        ObjectSource::Builtin(mvgrasp_geometry::objects::ObjectSpec {
+                            category,
+                            index,
+                            seed: self.library_seed,
+                        })
+                    })
+                })
+                .collect());
+        }
+        let mut sources = Vec::new();
+        for path in &self.mesh {
+            if path.is_dir() {
+                let mut found = Vec::new();
+                collect_meshes(path, &mut found)?;
+                if found.is_empty() {
+                    return Err(format!("{}: no .obj, .stl or .urdf inside", path.display()));
+                }
+                found.sort();
+                sources.extend(found.into_iter().map(ObjectSource::File));
+            } else if path.is_file() {
+                sources.push(ObjectSource::File(path.clone()));
+            } else {
+                return Err(format!("{}: no such file or folder", path.display()));
+            }
+        }
+        Ok(sources)
+    }
+}
+
+fn collect_meshes(dir: &std::path::Path, found: &mut Vec<PathBuf>) -> Result<(), String> {
+    let entries = std::fs::read_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    for entry in entries {
+        let path = entry.map_err(|e| format!("{}: {e}", dir.display()))?.path();
+        if path.is_dir() {
+            collect_meshes(&path, found)?;
+        } else if path
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| ["obj", "stl", "urdf"].contains(&e.to_ascii_lowercase().as_str()))
+        {
+            found.push(path);
+        }
+    }
+    Ok(())
+}

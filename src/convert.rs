@@ -1,6 +1,6 @@
 //! The one place where geometry's types become the renderer's plain arrays.
 
-use mvgrasp_geometry::{Camera, Intrinsics, Pose3, TriangleMesh};
+use mvgrasp_geometry::{Camera, Intrinsics, Mat3, Pose3, Rot3, TriangleMesh, Vec3};
 use mvgrasp_render::{Intrinsics as RenderIntrinsics, Sides, View};
 
 /// Which sides of `mesh` to draw: front faces only for a closed surface wound outwards (no
@@ -24,6 +24,16 @@ pub fn row_major(pose: &Pose3) -> [[f32; 4]; 4] {
     // glam is column-major: the columns of the transpose are the rows.
     let m = pose.to_mat4().transpose();
     [0, 1, 2, 3].map(|i| m.col(i).to_array())
+}
+
+/// The rigid pose of a row-major 4x4 matrix (the inverse of [`row_major`]; the bottom row is
+/// not read).
+pub fn pose_from_row_major(m: &[[f32; 4]; 4]) -> Pose3 {
+    let column = |j: usize| Vec3::new(m[0][j], m[1][j], m[2][j]);
+    Pose3::from_parts(
+        column(3),
+        Rot3::from_mat3(&Mat3::from_cols(column(0), column(1), column(2))),
+    )
 }
 
 /// The renderer's copy of the intrinsics (same fields).

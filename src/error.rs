@@ -33,6 +33,14 @@ pub enum Error {
         /// The file.
         path: PathBuf,
     },
+    /// A config file cannot be used.
+    #[error("{path}: {detail}")]
+    Config {
+        /// What is wrong.
+        detail: String,
+        /// The file.
+        path: PathBuf,
+    },
     /// A dataset request makes no sense (duplicate names, nothing to do, ...).
     #[error("dataset: {detail}")]
     Dataset {

@@ -9,6 +9,7 @@ pub mod cli;
 pub mod convert;
 pub mod dataset;
 pub mod error;
+pub mod grasp_dataset;
 pub mod grasp_image;
 pub mod report;
 

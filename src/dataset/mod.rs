@@ -52,7 +52,7 @@ impl ObjectSource {
         }
     }
 
-    fn describe(&self) -> String {
+    pub(crate) fn describe(&self) -> String {
         match self {
             Self::Builtin(spec) => format!(
                 "built-in {} #{} seed {}",
@@ -62,7 +62,7 @@ impl ObjectSource {
         }
     }
 
-    fn load(&self) -> Result<TriangleMesh> {
+    pub(crate) fn load(&self) -> Result<TriangleMesh> {
         Ok(match self {
             Self::Builtin(spec) => generate(spec.category, spec.index, spec.seed)?.mesh,
             Self::File(path) => load_mesh(path)?,

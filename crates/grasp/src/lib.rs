@@ -18,4 +18,7 @@ pub use grasp::{Grasp, ImageGrasp, PaperGrasp};
 pub use gripper::{Gripper, GripperPreset};
 pub use gripper_urdf::{UrdfGripper, UrdfGripperSpec};
 pub use object::GraspObject;
-pub use sampling::{SampledGrasp, SamplingParams, SamplingReport, sample_antipodal};
+pub use sampling::{
+    AntipodalAxis, SampledGrasp, SamplingParams, SamplingReport, canonical_frame, sample_antipodal,
+    sample_antipodal_axes,
+};

@@ -266,6 +266,124 @@ fn is_duplicate(a: &Grasp, b: &Grasp, params: &SamplingParams) -> bool {
         && a.approach().dot(b.approach()) > cos
 }
 
+/// An antipodal closing line on the object, before any approach is chosen: what Dex-Net calls a
+/// 3-D grasp (centre and axis).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AntipodalAxis {
+    /// Midway between the contacts, object frame.
+    pub center: Vec3,
+    /// Where the jaws touch (its `closing_axis` is the grasp's axis), object frame.
+    pub contacts: ContactPair,
+}
+
+impl AntipodalAxis {
+    /// The closing axis, object frame (unit).
+    pub fn axis(&self) -> Vec3 {
+        self.contacts.closing_axis
+    }
+
+    /// The gripper frame at this axis approaching at `angle_rad` about it, measured from the
+    /// canonical approach ([`canonical_frame`]); object frame.
+    pub fn object_from_gripper(&self, angle_rad: f32) -> Pose3 {
+        canonical_frame(self.center, self.axis(), angle_rad)
+    }
+}
+
+/// The gripper frame at `center` closing along `axis`, its approach turned `angle_rad` about
+/// the axis from a canonical one that depends only on the axis (so that grasps stored as a
+/// centre and an axis can be rebuilt exactly).
+pub fn canonical_frame(center: Vec3, axis: Vec3, angle_rad: f32) -> Pose3 {
+    let [y0, z0] = perpendiculars(axis);
+    let (s, c) = angle_rad.sin_cos();
+    let z = z0 * c + y0 * s;
+    let y = z.cross(axis);
+    Pose3::from_parts(center, Rot3::from_mat3(&Mat3::from_cols(axis, y, z)))
+}
+
+/// Samples up to `target_axes` distinct antipodal axes on `object`, with no approach chosen and
+/// no collision check (a caller that fixes the approach, such as a camera looking along it,
+/// checks collisions then). Two axes are distinct unless their centres are within
+/// `params.min_center_distance_m` and their axes within `params.min_angle_rad`. Seeded like
+/// [`sample_antipodal`]: the same axes for any thread count.
+///
+/// # Errors
+/// [`GraspError::InvalidParameter`] for bad parameters or an invalid gripper.
+pub fn sample_antipodal_axes(
+    object: &GraspObject,
+    gripper: &Gripper,
+    params: &SamplingParams,
+    target_axes: usize,
+    seed: u64,
+) -> Result<Vec<AntipodalAxis>> {
+    params.validate()?;
+    gripper.validate()?;
+    let surface = SurfaceSampler::new(object);
+    let cos = params.min_angle_rad.cos();
+    let mut axes: Vec<AntipodalAxis> = Vec::new();
+    let mut start = 0;
+    while start < params.max_tries && axes.len() < target_axes {
+        let end = (start + BATCH).min(params.max_tries);
+        let found: Vec<Option<AntipodalAxis>> = (start..end)
+            .into_par_iter()
+            .map(|i| {
+                let mut rng = ChaCha8Rng::seed_from_u64(grasp_seed(seed, i));
+                find_axis(object, gripper, params, &surface, &mut rng).ok()
+            })
+            .collect();
+        for candidate in found.into_iter().flatten() {
+            if axes.len() >= target_axes {
+                break;
+            }
+            let duplicate = axes.iter().any(|kept| {
+                kept.center.distance(candidate.center) < params.min_center_distance_m
+                    && kept.axis().dot(candidate.axis()).abs() > cos
+            });
+            if !duplicate {
+                axes.push(candidate);
+            }
+        }
+        start = end;
+    }
+    Ok(axes)
+}
+
+/// One try's antipodal axis, or why there is none.
+fn find_axis(
+    object: &GraspObject,
+    gripper: &Gripper,
+    params: &SamplingParams,
+    surface: &SurfaceSampler,
+    rng: &mut ChaCha8Rng,
+) -> std::result::Result<AntipodalAxis, TryOutcome> {
+    let (p1, outward) = surface.sample(object, rng);
+    let axis = sample_in_cone(-outward, params.friction_coef.atan(), rng);
+    // The far jaw's start: as far along the axis as the gripper reaches.
+    let reach = gripper.max_opening_m;
+    // (A little past p1, so that p1 itself is met when nothing else is.)
+    let Some(far) = object.caster().cast(p1 + axis * reach, -axis, reach + 1e-3) else {
+        return Err(TryOutcome::NoContacts);
+    };
+    let width = p1.distance(far.point);
+    // Meeting the start point again: the object is wider than the reach along this line.
+    if width < 1e-4 || !gripper.fits(width) {
+        return Err(TryOutcome::Width);
+    }
+    let frame = canonical_frame((p1 + far.point) / 2.0, axis, 0.0);
+    let Some(contacts) = find_contacts(object, &frame, gripper) else {
+        return Err(TryOutcome::NoContacts);
+    };
+    // `find_contacts` refuses mu <= 0, which `validate` already did.
+    if !force_closure(&contacts, params.friction_coef).unwrap_or(false) {
+        return Err(TryOutcome::Friction);
+    }
+    // Centre the gripper between the contacts it actually makes.
+    let [c0, c1] = contacts.contacts.map(|c| c.point);
+    Ok(AntipodalAxis {
+        center: (c0 + c1) / 2.0,
+        contacts,
+    })
+}
+
 fn try_axis(
     object: &GraspObject,
     gripper: &Gripper,
@@ -274,52 +392,25 @@ fn try_axis(
     surface: &SurfaceSampler,
     rng: &mut ChaCha8Rng,
 ) -> TryOutcome {
-    let (p1, outward) = surface.sample(object, rng);
-    let axis = sample_in_cone(-outward, params.friction_coef.atan(), rng);
-    // The far jaw's start: as far along the axis as the gripper reaches.
-    let reach = gripper.max_opening_m;
-    // (A little past p1, so that p1 itself is met when nothing else is.)
-    let Some(far) = object.caster().cast(p1 + axis * reach, -axis, reach + 1e-3) else {
-        return TryOutcome::NoContacts;
+    let found = match find_axis(object, gripper, params, surface, rng) {
+        Ok(found) => found,
+        Err(outcome) => return outcome,
     };
-    let width = p1.distance(far.point);
-    // Meeting the start point again: the object is wider than the reach along this line.
-    if width < 1e-4 || !gripper.fits(width) {
-        return TryOutcome::Width;
-    }
-    let [y0, z0] = perpendiculars(axis);
-    // The gripper at `center`, approaching at `angle` about the closing axis.
-    let frame = |center: Vec3, angle: f32| {
-        let (s, c) = angle.sin_cos();
-        let z = z0 * c + y0 * s;
-        let y = z.cross(axis);
-        Pose3::from_parts(center, Rot3::from_mat3(&Mat3::from_cols(axis, y, z)))
-    };
-    let Some(contacts) = find_contacts(object, &frame((p1 + far.point) / 2.0, 0.0), gripper) else {
-        return TryOutcome::NoContacts;
-    };
-    // `find_contacts` refuses mu <= 0, which `validate` already did.
-    if !force_closure(&contacts, params.friction_coef).unwrap_or(false) {
-        return TryOutcome::Friction;
-    }
-    // Centre the gripper between the contacts it actually makes.
-    let [c0, c1] = contacts.contacts.map(|c| c.point);
-    let center = (c0 + c1) / 2.0;
     let offset: f32 = rng.random_range(0.0..TAU);
     let k = params.approaches_per_axis;
     let mut free = Vec::with_capacity(k);
     let mut colliding = 0;
     for i in 0..k {
-        let pose = frame(center, offset + TAU * i as f32 / k as f32);
+        let pose = found.object_from_gripper(offset + TAU * i as f32 / k as f32);
         let collision =
             check_collision(object, gripper, &pose, table_from_object, &params.collision);
         if collision.is_free() {
             free.push(SampledGrasp {
                 grasp: Grasp {
                     world_from_gripper: pose,
-                    width_m: contacts.width_m,
+                    width_m: found.contacts.width_m,
                 },
-                contacts,
+                contacts: found.contacts,
             });
         } else {
             colliding += 1;

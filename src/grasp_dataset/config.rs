@@ -1,0 +1,309 @@
+//! The typed config of a grasp dataset (one TOML file per dataset).
+
+use std::path::Path;
+
+use mvgrasp_geometry::{Intrinsics, IntrinsicsPreset};
+use mvgrasp_grasp::physics::PhysicsParams;
+use mvgrasp_grasp::quality::RobustQualityParams;
+use mvgrasp_grasp::{Gripper, GripperPreset, SamplingParams};
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+
+/// Everything that decides a grasp dataset's bytes. Every field has a default; a TOML file
+/// sets any of them (unknown keys are errors).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct GraspDatasetConfig {
+    /// Seeds everything (mixed with each object's name).
+    pub seed: u64,
+    /// A gripper preset name (`panda`, `yumi`, `robotiq_2f_85`) or a gripper file (TOML,
+    /// JSON, Dex-Net `params.json`, URDF).
+    pub gripper: String,
+    /// An intrinsics preset name (`phoxi_s`, `primesense`, `realsense_d435`).
+    pub intrinsics: String,
+    /// Where the cameras are.
+    pub cameras: CameraDistribution,
+    /// The most probable stable poses used per object (marginal ones left out).
+    pub stable_poses_per_object: usize,
+    /// Antipodal axes sampled per stable pose (each scored once, then seen by every view).
+    pub grasps_per_pose: usize,
+    /// Cameras per stable pose.
+    pub views_per_pose: usize,
+    /// A grasp belongs to a view when its approach, turned to lie across its axis, is within
+    /// this angle of the optical axis, degrees.
+    pub max_tilt_deg: f32,
+    /// The image crops.
+    pub crop: CropParams,
+    /// Depth noise (off by default).
+    pub noise: NoiseParams,
+    /// Fraction of the collision-free datapoints that also get a rapier trial, chosen by a hash
+    /// of their ids (0 turns physics off).
+    pub physics_fraction: f32,
+    /// Objects per shard (a shard holds whole objects).
+    pub objects_per_shard: usize,
+    /// Antipodal sampling (friction cone, tries, duplicates, collision margins).
+    pub sampling: SamplingParams,
+    /// Robust quality (Dex-Net 2.0's perturbations and label threshold).
+    pub quality: RobustQualityParams,
+    /// Physics trials.
+    pub physics: PhysicsParams,
+}
+
+impl Default for GraspDatasetConfig {
+    fn default() -> Self {
+        Self {
+            seed: 0,
+            gripper: GripperPreset::Panda.name().to_string(),
+            intrinsics: IntrinsicsPreset::PhoxiS.name().to_string(),
+            cameras: CameraDistribution::TopDown(TopDownCameras::default()),
+            stable_poses_per_object: 3,
+            grasps_per_pose: 100,
+            views_per_pose: 10,
+            max_tilt_deg: 5.0,
+            crop: CropParams::default(),
+            noise: NoiseParams::default(),
+            physics_fraction: 0.1,
+            objects_per_shard: 4,
+            sampling: SamplingParams {
+                max_tries: 2000,
+                ..SamplingParams::default()
+            },
+            quality: RobustQualityParams::default(),
+            physics: PhysicsParams::default(),
+        }
+    }
+}
+
+/// The two camera distributions of issue 5.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum CameraDistribution {
+    /// Dex-Net 2.0's: above the table, looking down.
+    TopDown(TopDownCameras),
+    /// The multi-view GQ-CNN's: anywhere on the hemisphere, looking at the object.
+    MultiView(MultiViewCameras),
+}
+
+/// Cameras above the table as Dex-Net 2.0 sampled them.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TopDownCameras {
+    /// Distance from the point looked at, metres, uniform in `[min, max]`.
+    pub radius_m: [f32; 2],
+    /// Largest angle between the optical axis and straight down, degrees (uniform from 0).
+    pub max_polar_deg: f32,
+    /// The point looked at is the object's centre of mass moved by up to this much in x and y
+    /// (uniform), so the object sits off the image centre, metres.
+    pub planar_offset_m: f32,
+}
+
+impl Default for TopDownCameras {
+    fn default() -> Self {
+        Self {
+            radius_m: [0.65, 0.75],
+            max_polar_deg: 18.0,
+            planar_offset_m: 0.05,
+        }
+    }
+}
+
+/// Cameras on the hemisphere around the object, optical axis through its centre of mass.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MultiViewCameras {
+    /// Distance from the object's centre of mass, metres, uniform in `[min, max]`.
+    pub radius_m: [f32; 2],
+    /// Elevation of the camera above the table plane, degrees, uniform in `[min, max]` (90 is
+    /// straight down).
+    pub elevation_deg: [f32; 2],
+}
+
+impl Default for MultiViewCameras {
+    fn default() -> Self {
+        Self {
+            radius_m: [0.5, 0.75],
+            elevation_deg: [10.0, 90.0],
+        }
+    }
+}
+
+/// How a grasp's crop is cut (Dex-Net 2.0: a 96 x 96 window scaled to 32 x 32).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CropParams {
+    /// Side of the window in the rendered image, pixels.
+    pub window_px: u32,
+    /// Side of the stored crop, pixels (even, so that pixel `(size/2, size/2)` is the centre).
+    pub size_px: u32,
+}
+
+impl Default for CropParams {
+    fn default() -> Self {
+        Self {
+            window_px: 96,
+            size_px: 32,
+        }
+    }
+}
+
+/// Dex-Net's depth noise: a multiplicative Gamma factor per image, and Gaussian noise drawn on
+/// a coarse grid and upsampled (so neighbouring pixels move together).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct NoiseParams {
+    /// Apply the noise.
+    pub enabled: bool,
+    /// Shape k of the Gamma factor (mean 1, variance 1/k; Dex-Net: 1000).
+    pub gamma_shape: f32,
+    /// Standard deviation of the correlated Gaussian noise, metres (Dex-Net: 0.005).
+    pub sigma_m: f32,
+    /// The Gaussian noise is drawn every this many pixels and interpolated between (Dex-Net's
+    /// `gp_rescale_factor`: 4).
+    pub correlation_px: u32,
+}
+
+impl Default for NoiseParams {
+    fn default() -> Self {
+        Self {
+            enabled: false,
+            gamma_shape: 1000.0,
+            sigma_m: 0.005,
+            correlation_px: 4,
+        }
+    }
+}
+
+impl GraspDatasetConfig {
+    /// Reads a TOML config; keys not given keep their defaults.
+    ///
+    /// # Errors
+    /// [`Error::Config`] naming the file: unreadable, malformed, an unknown key, a wrong type,
+    /// or a value out of range ([`GraspDatasetConfig::validate`]).
+    pub fn from_file(path: &Path) -> Result<Self> {
+        let fail = |detail: String| Error::Config {
+            detail,
+            path: path.to_path_buf(),
+        };
+        let text = std::fs::read_to_string(path).map_err(|e| fail(e.to_string()))?;
+        let config: Self = toml::from_str(&text).map_err(|e| fail(e.to_string()))?;
+        config.validate().map_err(|e| fail(e.to_string()))?;
+        Ok(config)
+    }
+
+    /// Checks every value that the types do not.
+    ///
+    /// # Errors
+    /// [`Error::Dataset`] naming the first bad key, or the gripper's or intrinsics' error.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |key: &str, why: &str| {
+            Err(Error::Dataset {
+                detail: format!("config key {key}: {why}"),
+            })
+        };
+        self.gripper()?;
+        self.intrinsics()?;
+        for (key, value) in [
+            ("stable_poses_per_object", self.stable_poses_per_object),
+            ("grasps_per_pose", self.grasps_per_pose),
+            ("views_per_pose", self.views_per_pose),
+            ("objects_per_shard", self.objects_per_shard),
+        ] {
+            if value == 0 {
+                return bad(key, "must be at least 1");
+            }
+        }
+        if !(self.max_tilt_deg.is_finite() && (0.0..90.0).contains(&self.max_tilt_deg)) {
+            return bad("max_tilt_deg", "must be in [0, 90)");
+        }
+        if !(0.0..=1.0).contains(&self.physics_fraction) {
+            return bad("physics_fraction", "must be in [0, 1]");
+        }
+        let c = self.crop;
+        if c.size_px == 0 || !c.size_px.is_multiple_of(2) || c.window_px < c.size_px {
+            return bad("crop", "size_px must be even and > 0, window_px >= size_px");
+        }
+        let n = self.noise;
+        let noise_ok = n.gamma_shape.is_finite()
+            && n.gamma_shape > 0.0
+            && n.sigma_m.is_finite()
+            && n.sigma_m >= 0.0
+            && n.correlation_px > 0;
+        if !noise_ok {
+            return bad(
+                "noise",
+                "gamma_shape > 0, sigma_m >= 0 and correlation_px >= 1",
+            );
+        }
+        let ordered = |r: [f32; 2]| r[0].is_finite() && r[1].is_finite() && r[0] <= r[1];
+        match self.cameras {
+            CameraDistribution::TopDown(t) => {
+                if !(ordered(t.radius_m) && t.radius_m[0] > 0.0) {
+                    return bad("cameras.radius_m", "must be [min, max] with 0 < min <= max");
+                }
+                if !((0.0..=90.0).contains(&t.max_polar_deg)
+                    && t.planar_offset_m.is_finite()
+                    && t.planar_offset_m >= 0.0)
+                {
+                    return bad(
+                        "cameras",
+                        "max_polar_deg must be in [0, 90], planar_offset_m >= 0",
+                    );
+                }
+            }
+            CameraDistribution::MultiView(m) => {
+                if !(ordered(m.radius_m) && m.radius_m[0] > 0.0) {
+                    return bad("cameras.radius_m", "must be [min, max] with 0 < min <= max");
+                }
+                if !(ordered(m.elevation_deg)
+                    && m.elevation_deg[0] >= 0.0
+                    && m.elevation_deg[1] <= 90.0)
+                {
+                    return bad("cameras.elevation_deg", "must be [min, max] within [0, 90]");
+                }
+            }
+        }
+        self.sampling.validate()?;
+        self.quality.validate()?;
+        self.physics.validate()?;
+        Ok(())
+    }
+
+    /// The gripper the config names.
+    ///
+    /// # Errors
+    /// [`Error::Dataset`] when it is neither a preset nor a readable gripper file.
+    pub fn gripper(&self) -> Result<Gripper> {
+        if let Ok(preset) = self.gripper.parse::<GripperPreset>() {
+            return Ok(Gripper::preset(preset));
+        }
+        if Path::new(&self.gripper).exists() {
+            return Ok(Gripper::from_file(&self.gripper)?);
+        }
+        Err(Error::Dataset {
+            detail: format!(
+                "config key gripper: {:?} is neither a preset (panda, yumi, robotiq_2f_85) nor a \
+                 file that exists",
+                self.gripper
+            ),
+        })
+    }
+
+    /// The intrinsics the config names.
+    ///
+    /// # Errors
+    /// [`Error::Dataset`] for an unknown preset name.
+    pub fn intrinsics(&self) -> Result<Intrinsics> {
+        IntrinsicsPreset::ALL
+            .into_iter()
+            .find(|p| p.name() == self.intrinsics)
+            .map(Intrinsics::preset)
+            .ok_or_else(|| Error::Dataset {
+                detail: format!(
+                    "config key intrinsics: {:?} is not one of phoxi_s, primesense, \
+                     realsense_d435",
+                    self.intrinsics
+                ),
+            })
+    }
+}

@@ -1,0 +1,173 @@
+//! Grasp-centred, grasp-aligned crops of a depth image (Dex-Net 2.0's image transform).
+//!
+//! Crop pixel `(row i, column j)` of a crop of side `S` cut from a window of side `W` around a
+//! grasp at image point `c` with in-image angle `phi` shows the image at
+//! `c + R(phi) * ((j - S/2) * W/S, (i - S/2) * W/S)`: pixel `(S/2, S/2)` is the grasp centre
+//! and the grasp axis runs along the crop's rows (+j towards the grasp's +x jaw). Image
+//! coordinates are the project's: pixel `(u, v)` has its centre at `(u, v)`. Each crop pixel
+//! is the mean of `round(W/S)^2` bilinear samples spread over its footprint (an area filter);
+//! a sample next to an empty pixel (0) takes its nearest pixel instead, and empty samples are
+//! left out of the mean.
+
+use super::config::CropParams;
+
+/// The image point that crop coordinates `(x = column, y = row)` show (see the module docs).
+pub fn crop_to_image(
+    center_px: [f32; 2],
+    angle_rad: f32,
+    params: &CropParams,
+    xy: [f32; 2],
+) -> [f32; 2] {
+    let scale = params.window_px as f32 / params.size_px as f32;
+    let half = params.size_px as f32 / 2.0;
+    let (s, c) = angle_rad.sin_cos();
+    let dx = (xy[0] - half) * scale;
+    let dy = (xy[1] - half) * scale;
+    [
+        center_px[0] + c * dx - s * dy,
+        center_px[1] + s * dx + c * dy,
+    ]
+}
+
+/// The crop coordinates `(x = column, y = row)` of image point `uv` (the inverse of
+/// [`crop_to_image`]).
+pub fn image_to_crop(
+    center_px: [f32; 2],
+    angle_rad: f32,
+    params: &CropParams,
+    uv: [f32; 2],
+) -> [f32; 2] {
+    let scale = params.window_px as f32 / params.size_px as f32;
+    let half = params.size_px as f32 / 2.0;
+    let (s, c) = angle_rad.sin_cos();
+    let du = uv[0] - center_px[0];
+    let dv = uv[1] - center_px[1];
+    [
+        (c * du + s * dv) / scale + half,
+        (-s * du + c * dv) / scale + half,
+    ]
+}
+
+/// Cuts the crop of the grasp at `center_px`, `angle_rad` from a `width` x `height` depth
+/// image (row-major, metres, 0 = nothing); `size_px^2` values, row-major.
+pub fn crop_depth(
+    depth_m: &[f32],
+    width: u32,
+    height: u32,
+    center_px: [f32; 2],
+    angle_rad: f32,
+    params: &CropParams,
+) -> Vec<f32> {
+    let size = params.size_px as usize;
+    let per_side = (params.window_px as f32 / params.size_px as f32)
+        .round()
+        .max(1.0) as usize;
+    let mut out = Vec::with_capacity(size * size);
+    for i in 0..size {
+        for j in 0..size {
+            let mut sum = 0.0f64;
+            let mut count = 0u32;
+            for a in 0..per_side {
+                for b in 0..per_side {
+                    let sub = |k: usize| (k as f32 + 0.5) / per_side as f32 - 0.5;
+                    let xy = [j as f32 + sub(b), i as f32 + sub(a)];
+                    let uv = crop_to_image(center_px, angle_rad, params, xy);
+                    let value = sample(depth_m, width, height, uv);
+                    if value > 0.0 {
+                        sum += f64::from(value);
+                        count += 1;
+                    }
+                }
+            }
+            out.push(if count == 0 {
+                0.0
+            } else {
+                (sum / f64::from(count)) as f32
+            });
+        }
+    }
+    out
+}
+
+/// Bilinear sample at `uv`; the nearest pixel when a neighbour is empty; 0 outside the image.
+fn sample(depth_m: &[f32], width: u32, height: u32, [u, v]: [f32; 2]) -> f32 {
+    let (w, h) = (width as i64, height as i64);
+    let at = |x: i64, y: i64| -> f32 {
+        if (0..w).contains(&x) && (0..h).contains(&y) {
+            depth_m[(y * w + x) as usize]
+        } else {
+            0.0
+        }
+    };
+    if !(u.is_finite() && v.is_finite()) {
+        return 0.0;
+    }
+    let (x0, y0) = (u.floor() as i64, v.floor() as i64);
+    let (fx, fy) = (u - u.floor(), v - v.floor());
+    let corners = [
+        at(x0, y0),
+        at(x0 + 1, y0),
+        at(x0, y0 + 1),
+        at(x0 + 1, y0 + 1),
+    ];
+    if corners.iter().all(|&d| d > 0.0) {
+        let top = corners[0] * (1.0 - fx) + corners[1] * fx;
+        let bottom = corners[2] * (1.0 - fx) + corners[3] * fx;
+        top * (1.0 - fy) + bottom * fy
+    } else {
+        at(u.round() as i64, v.round() as i64)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn crop_and_image_coordinates_invert_each_other() {
+        let params = CropParams::default();
+        let (c, a) = ([200.5, 140.25], 0.7);
+        let xy = image_to_crop(c, a, &params, crop_to_image(c, a, &params, [3.0, 29.5]));
+        assert!(
+            (xy[0] - 3.0).abs() < 1e-4 && (xy[1] - 29.5).abs() < 1e-4,
+            "{xy:?}"
+        );
+        assert_eq!(crop_to_image(c, a, &params, [16.0, 16.0]), c);
+    }
+
+    #[test]
+    fn a_ramp_is_sampled_along_the_grasp_axis() {
+        // Depth rises 1 mm a pixel along u: a crop at angle 0 rises 3 mm a crop pixel along
+        // its rows and is constant down its columns; at 90 degrees the other way round.
+        let (w, h) = (200u32, 150u32);
+        let depth: Vec<f32> = (0..h)
+            .flat_map(|_| (0..w).map(|u| 0.5 + 0.001 * u as f32))
+            .collect();
+        let params = CropParams::default();
+        let crop = crop_depth(&depth, w, h, [100.0, 75.0], 0.0, &params);
+        assert!(
+            (crop[16 * 32 + 16] - 0.6).abs() < 1e-5,
+            "{}",
+            crop[16 * 32 + 16]
+        );
+        assert!((crop[16 * 32 + 17] - crop[16 * 32 + 16] - 0.003).abs() < 1e-5);
+        assert!((crop[17 * 32 + 16] - crop[16 * 32 + 16]).abs() < 1e-6);
+        let turned = crop_depth(
+            &depth,
+            w,
+            h,
+            [100.0, 75.0],
+            std::f32::consts::FRAC_PI_2,
+            &params,
+        );
+        assert!((turned[17 * 32 + 16] - turned[16 * 32 + 16] + 0.003).abs() < 1e-5);
+    }
+
+    #[test]
+    fn outside_the_image_is_empty() {
+        let depth = vec![0.7f32; 64 * 64];
+        let crop = crop_depth(&depth, 64, 64, [2.0, 2.0], 0.0, &CropParams::default());
+        assert_eq!(crop[0], 0.0);
+        assert_eq!(crop[16 * 32 + 16], 0.7);
+    }
+}

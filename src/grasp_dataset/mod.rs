@@ -1,0 +1,353 @@
+//! Grasp datasets for the GQ-CNN and the multi-view GQ-CNN (Dex-Net 2.0's datapoints, from any
+//! meshes, gripper and camera).
+//!
+//! A datapoint is a depth crop centred on a grasp and turned so that its axis runs along the
+//! crop's rows ([`crop`]), the grasp's depth, the view's angle to the table (theta), Dex-Net
+//! 2.0's robust label, and for a share of them a rapier trial. Per object: its most probable
+//! stable poses; per pose, antipodal axes sampled and scored once (robust Ferrari-Canny, which
+//! does not depend on the approach), cameras drawn from the configured distribution, depth
+//! rendered (optionally with Dex-Net's noise), and every axis that a view sees across (its
+//! approach along the optical axis within `max_tilt_deg`) becomes a datapoint, labelled
+//! positive when robust and collision-free along that approach.
+//!
+//! Output folder:
+//! ```text
+//! dataset.json                manifest: format, config, crop size, objects (id, name, source),
+//!                             finished shards with their counts, and the totals
+//! shard_NNNNN.safetensors     datapoints of objects [N*k, N*k + k) (k = objects_per_shard)
+//! shard_NNNNN.json            that shard's counts (written before the shard)
+//! ```
+//! Tensors are listed in [`shard`]. Shards are written atomically and a rerun skips those
+//! that are finished, so an interrupted run loses at most the shards in progress; every
+//! random choice is seeded from the config's seed and the object's name, so the same config
+//! gives the same bytes for any thread count and any split of the shards across machines
+//! ([`generate_shard`] makes one shard alone).
+
+pub mod cameras;
+pub mod config;
+pub mod crop;
+pub mod noise;
+mod object;
+pub mod shard;
+
+pub use config::{
+    CameraDistribution, CropParams, GraspDatasetConfig, MultiViewCameras, NoiseParams,
+    TopDownCameras,
+};
+pub use shard::{Datapoint, ShardRecord};
+
+use std::path::Path;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use mvgrasp_render::Renderer;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::dataset::{ObjectSource, name_hash, splitmix};
+use crate::error::{Error, Result};
+use object::{Resolved, object_datapoints};
+use shard::{finished_shard, write_atomically, write_shard};
+
+/// The manifest's format tag.
+pub const FORMAT: &str = "mvgrasp-grasp-dataset/1";
+
+/// One object of a dataset.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ManifestObject {
+    /// Index: `object_id` in the shards.
+    pub id: u32,
+    /// Unique name.
+    pub name: String,
+    /// Where it came from.
+    pub source: String,
+}
+
+/// `dataset.json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Manifest {
+    /// [`FORMAT`].
+    pub format: String,
+    /// The config that made it.
+    pub config: GraspDatasetConfig,
+    /// The gripper, resolved.
+    pub gripper: mvgrasp_grasp::Gripper,
+    /// The intrinsics, resolved.
+    pub intrinsics: mvgrasp_geometry::Intrinsics,
+    /// Every object, in id order.
+    pub objects: Vec<ManifestObject>,
+    /// How many shards the objects make.
+    pub num_shards: usize,
+    /// Finished shards, by index.
+    pub shards: Vec<ShardRecord>,
+    /// Sums over the finished shards.
+    pub totals: Totals,
+}
+
+/// Counts summed over shards.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Totals {
+    /// Datapoints.
+    pub datapoints: usize,
+    /// Robust-label positives.
+    pub positives: usize,
+    /// Collision-free datapoints.
+    pub collision_free: usize,
+    /// Rapier trials run.
+    pub physics_trials: usize,
+    /// Trials that held the object.
+    pub physics_held: usize,
+    /// Trials whose outcome matched the robust label.
+    pub physics_agree: usize,
+}
+
+impl Totals {
+    fn add(&mut self, r: &ShardRecord) {
+        self.datapoints += r.datapoints;
+        self.positives += r.positives;
+        self.collision_free += r.collision_free;
+        self.physics_trials += r.physics_trials;
+        self.physics_held += r.physics_held;
+        self.physics_agree += r.physics_agree;
+    }
+}
+
+/// What a run did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GenerateSummary {
+    /// Shards made in this run.
+    pub written: usize,
+    /// Shards an earlier run had finished.
+    pub skipped: usize,
+    /// The manifest's totals after the run.
+    pub totals: Totals,
+}
+
+/// A dataset's objects, in id order, and the resolved config.
+pub struct DatasetPlan {
+    objects: Vec<(ManifestObject, ObjectSource)>,
+    config: GraspDatasetConfig,
+    resolved: Resolved,
+}
+
+impl DatasetPlan {
+    /// Checks the config and names the objects (ids in the order given).
+    ///
+    /// # Errors
+    /// [`Error::Dataset`] for an invalid config, no objects, or two objects with one name.
+    pub fn new(sources: &[ObjectSource], config: &GraspDatasetConfig) -> Result<Self> {
+        config.validate()?;
+        if sources.is_empty() {
+            return Err(Error::Dataset {
+                detail: "no objects to make a grasp dataset of".into(),
+            });
+        }
+        let mut names: Vec<String> = sources.iter().map(ObjectSource::name).collect();
+        names.sort();
+        if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
+            return Err(Error::Dataset {
+                detail: format!("two objects are named {:?}; rename one file", w[0]),
+            });
+        }
+        let objects = sources
+            .iter()
+            .enumerate()
+            .map(|(id, source)| {
+                (
+                    ManifestObject {
+                        id: id as u32,
+                        name: source.name(),
+                        source: source.describe(),
+                    },
+                    source.clone(),
+                )
+            })
+            .collect();
+        Ok(Self {
+            objects,
+            resolved: Resolved {
+                gripper: config.gripper()?,
+                intrinsics: config.intrinsics()?,
+            },
+            config: config.clone(),
+        })
+    }
+
+    /// How many shards the objects make.
+    pub fn num_shards(&self) -> usize {
+        self.objects.len().div_ceil(self.config.objects_per_shard)
+    }
+
+    fn manifest(&self, shards: Vec<ShardRecord>) -> Manifest {
+        let mut totals = Totals::default();
+        for s in &shards {
+            totals.add(s);
+        }
+        Manifest {
+            format: FORMAT.into(),
+            config: self.config.clone(),
+            gripper: self.resolved.gripper.clone(),
+            intrinsics: self.resolved.intrinsics,
+            objects: self.objects.iter().map(|(o, _)| o.clone()).collect(),
+            num_shards: self.num_shards(),
+            shards,
+            totals,
+        }
+    }
+
+    /// Writes the manifest from the shards finished in `out`; returns it.
+    ///
+    /// # Errors
+    /// [`Error::Io`] when it cannot be written.
+    pub fn write_manifest(&self, out: &Path) -> Result<Manifest> {
+        let shards = (0..self.num_shards())
+            .filter_map(|i| finished_shard(out, i))
+            .collect();
+        let manifest = self.manifest(shards);
+        let text = serde_json::to_string_pretty(&manifest).map_err(|e| Error::Dataset {
+            detail: format!("{}: {e}", out.display()),
+        })? + "\n";
+        write_atomically(&out.join("dataset.json"), text.as_bytes())?;
+        Ok(manifest)
+    }
+
+    /// Refuses a folder that holds a dataset of another config or other objects.
+    fn check_existing(&self, out: &Path) -> Result<()> {
+        let path = out.join("dataset.json");
+        let Ok(text) = std::fs::read_to_string(&path) else {
+            return Ok(());
+        };
+        let fail = |detail: &str| Error::Config {
+            detail: detail.into(),
+            path: path.clone(),
+        };
+        let existing: Manifest = serde_json::from_str(&text)
+            .map_err(|e| fail(&format!("not a grasp dataset manifest: {e}")))?;
+        let fresh = self.manifest(Vec::new());
+        if existing.config != fresh.config || existing.objects != fresh.objects {
+            return Err(fail(
+                "this folder holds a dataset made with another config or other objects; use \
+                 another folder or delete it",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Makes shard `index` of the dataset in `out` unless it is finished; its record.
+///
+/// Objects of the shard run in parallel on rayon's pool. An object that cannot be used (a
+/// mesh that fails to load, no stable pose) gives no datapoints and is listed, with the
+/// error, in the record's `empty_objects`.
+///
+/// # Errors
+/// [`Error::Dataset`] for an index beyond the plan; write errors; a renderer error.
+pub fn generate_shard(
+    renderer: &Renderer,
+    plan: &DatasetPlan,
+    out: &Path,
+    index: usize,
+) -> Result<ShardRecord> {
+    if index >= plan.num_shards() {
+        return Err(Error::Dataset {
+            detail: format!(
+                "shard {index} does not exist: the dataset has {}",
+                plan.num_shards()
+            ),
+        });
+    }
+    if let Some(record) = finished_shard(out, index) {
+        return Ok(record);
+    }
+    std::fs::create_dir_all(out).map_err(Error::io("create", out))?;
+    let k = plan.config.objects_per_shard;
+    let objects = &plan.objects[index * k..((index + 1) * k).min(plan.objects.len())];
+    let results: Vec<(u32, Result<Vec<Datapoint>>)> = objects
+        .par_iter()
+        .map(|(object, source)| {
+            let object_seed = splitmix(plan.config.seed ^ name_hash(&object.name));
+            let points = source.load().and_then(|mesh| {
+                object_datapoints(
+                    renderer,
+                    &mesh,
+                    object.id,
+                    object_seed,
+                    &plan.config,
+                    &plan.resolved,
+                )
+            });
+            (object.id, points)
+        })
+        .collect();
+    let mut record = ShardRecord {
+        index,
+        file: shard::shard_file(index),
+        objects: objects.iter().map(|(o, _)| o.id).collect(),
+        ..ShardRecord::default()
+    };
+    let mut points = Vec::new();
+    for (id, result) in results {
+        match result {
+            Ok(p) if p.is_empty() => record.empty_objects.push((id, "no datapoints".into())),
+            Ok(p) => points.extend(p),
+            Err(e @ Error::Render(_)) => return Err(e),
+            Err(e) => record.empty_objects.push((id, e.to_string())),
+        }
+    }
+    record.datapoints = points.len();
+    record.positives = points.iter().filter(|p| p.robust_label).count();
+    record.collision_free = points.iter().filter(|p| p.collision_free).count();
+    let trials = points.iter().filter(|p| p.physics >= 0);
+    record.physics_trials = trials.clone().count();
+    record.physics_held = trials.clone().filter(|p| p.physics == 1).count();
+    record.physics_agree = trials
+        .filter(|p| (p.physics == 1) == p.robust_label)
+        .count();
+    write_shard(out, &points, plan.config.crop.size_px as usize, &record)?;
+    Ok(record)
+}
+
+/// Makes every unfinished shard of `sources` in `out` and writes the manifest after each.
+///
+/// # Errors
+/// [`Error::Config`] when `out` holds a dataset of another config; the errors of
+/// [`DatasetPlan::new`] and [`generate_shard`].
+pub fn generate(
+    renderer: &Renderer,
+    sources: &[ObjectSource],
+    config: &GraspDatasetConfig,
+    out: &Path,
+    progress: bool,
+) -> Result<GenerateSummary> {
+    let plan = DatasetPlan::new(sources, config)?;
+    std::fs::create_dir_all(out).map_err(Error::io("create", out))?;
+    plan.check_existing(out)?;
+    plan.write_manifest(out)?;
+    let bar = if progress {
+        ProgressBar::new(sources.len() as u64)
+    } else {
+        ProgressBar::hidden()
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{bar:30} {pos}/{len} objects, {per_sec}, {eta} left, {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let mut summary = GenerateSummary::default();
+    let mut datapoints = 0;
+    for index in 0..plan.num_shards() {
+        let record = if let Some(record) = finished_shard(out, index) {
+            summary.skipped += 1;
+            record
+        } else {
+            let record = generate_shard(renderer, &plan, out, index)?;
+            plan.write_manifest(out)?;
+            summary.written += 1;
+            record
+        };
+        datapoints += record.datapoints;
+        bar.inc(record.objects.len() as u64);
+        bar.set_message(format!("{datapoints} datapoints"));
+    }
+    bar.finish_and_clear();
+    summary.totals = plan.write_manifest(out)?.totals;
+    Ok(summary)
+}

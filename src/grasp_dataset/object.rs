@@ -1,0 +1,300 @@
+//! The datapoints of one object: its stable poses, antipodal axes scored once per pose, cameras
+//! that render its depth, and the grasps that approach along each view.
+
+use mvgrasp_geometry::{Pose3, StablePoseParams, TriangleMesh, Vec3, stable_poses};
+use mvgrasp_grasp::physics::{PhysicsObject, simulate_grasp};
+use mvgrasp_grasp::quality::{grasp_seed, robust_qualities};
+use mvgrasp_grasp::{
+    AntipodalAxis, Grasp, GraspObject, Gripper, canonical_frame, check_collision,
+    sample_antipodal_axes,
+};
+use mvgrasp_render::{Colors, IDENTITY, MeshInput, Renderer, Sides};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+use super::cameras::{sample_camera, theta_rad};
+use super::config::GraspDatasetConfig;
+use super::crop::crop_depth;
+use super::noise::add_depth_noise;
+use super::shard::Datapoint;
+use crate::convert::{render_view, row_major, sides_of};
+use crate::dataset::splitmix;
+use crate::error::Result;
+
+/// Half the rendered table's side, metres: wide enough to fill low side views.
+const TABLE_HALF_SIDE_M: f32 = 1.5;
+
+/// What the generator resolved from the config once.
+pub(crate) struct Resolved {
+    pub gripper: Gripper,
+    pub intrinsics: mvgrasp_geometry::Intrinsics,
+}
+
+/// The seeds of one object, all derived from its seed.
+fn seed_of(object_seed: u64, what: u64, a: u64, b: u64) -> u64 {
+    splitmix(splitmix(splitmix(object_seed ^ what) ^ a) ^ b)
+}
+
+const SAMPLING: u64 = 1;
+const QUALITY: u64 = 2;
+const CAMERA: u64 = 3;
+const NOISE: u64 = 4;
+const PHYSICS: u64 = 5;
+
+/// The seed of the robust quality of axis `grasp` in pose `pose` (what `quality_seed` records).
+pub(crate) fn quality_seed(object_seed: u64, pose: usize, grasp: usize) -> u64 {
+    grasp_seed(seed_of(object_seed, QUALITY, pose as u64, 0), grasp)
+}
+
+/// All datapoints of `mesh` (object `object_id`, seeded with `object_seed`), in the order
+/// stable pose, view, axis. An object with no stable pose or no antipodal axis gives none.
+pub(crate) fn object_datapoints(
+    renderer: &Renderer,
+    mesh: &TriangleMesh,
+    object_id: u32,
+    object_seed: u64,
+    config: &GraspDatasetConfig,
+    resolved: &Resolved,
+) -> Result<Vec<Datapoint>> {
+    let poses = {
+        let params = StablePoseParams {
+            min_probability: 0.0,
+            ..Default::default()
+        };
+        let all = stable_poses(mesh, &params)?;
+        let steady: Vec<_> = all.iter().filter(|p| !p.marginal).copied().collect();
+        let mut chosen = if steady.is_empty() { all } else { steady };
+        chosen.truncate(config.stable_poses_per_object);
+        chosen
+    };
+    let object = GraspObject::new(mesh.clone())?;
+    let physics_object = if config.physics_fraction > 0.0 {
+        Some(PhysicsObject::from_grasp_object(
+            &object,
+            &Default::default(),
+        )?)
+    } else {
+        None
+    };
+    let com = object.center_of_mass();
+    let mut points = Vec::new();
+    for (pose_index, pose) in poses.iter().enumerate() {
+        let table_from_object = pose.table_from_object;
+        let axes = sample_antipodal_axes(
+            &object,
+            &resolved.gripper,
+            &config.sampling,
+            config.grasps_per_pose,
+            seed_of(object_seed, SAMPLING, pose_index as u64, 0),
+        )?;
+        if axes.is_empty() {
+            continue;
+        }
+        let frames: Vec<Pose3> = axes.iter().map(|a| a.object_from_gripper(0.0)).collect();
+        let qualities = robust_qualities(
+            &object,
+            &frames,
+            &resolved.gripper,
+            &config.quality,
+            seed_of(object_seed, QUALITY, pose_index as u64, 0),
+        )?;
+        let target = table_from_object.transform_point(com);
+        let cameras = (0..config.views_per_pose)
+            .map(|view| {
+                let mut rng = ChaCha8Rng::seed_from_u64(seed_of(
+                    object_seed,
+                    CAMERA,
+                    pose_index as u64,
+                    view as u64,
+                ));
+                sample_camera(&config.cameras, resolved.intrinsics, target, &mut rng)
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let frames_rendered = render_depths(renderer, mesh, &table_from_object, &cameras)?;
+        let mut candidates = Vec::new();
+        for (view, (camera, mut depth)) in cameras.iter().zip(frames_rendered).enumerate() {
+            let (w, h) = (camera.intrinsics.width, camera.intrinsics.height);
+            if config.noise.enabled {
+                let seed = seed_of(object_seed, NOISE, pose_index as u64, view as u64);
+                add_depth_noise(&mut depth, w, h, &config.noise, seed);
+            }
+            let optical = camera.optical_axis();
+            let max_tilt = config.max_tilt_deg.to_radians();
+            for (grasp_index, (axis, quality)) in axes.iter().zip(&qualities).enumerate() {
+                let Some(object_from_gripper) =
+                    aligned_frame(axis, &table_from_object, optical, max_tilt)
+                else {
+                    continue;
+                };
+                let grasp = Grasp {
+                    world_from_gripper: table_from_object * object_from_gripper,
+                    width_m: axis.contacts.width_m,
+                };
+                // A little slack: the frame was built within the tilt limit.
+                let Some(image) = grasp.to_image(camera, max_tilt + 1e-4) else {
+                    continue;
+                };
+                let [u, v] = image.center_px;
+                if !(0.0..w as f32).contains(&u) || !(0.0..h as f32).contains(&v) {
+                    continue;
+                }
+                let collision = check_collision(
+                    &object,
+                    &resolved.gripper,
+                    &object_from_gripper,
+                    Some(&table_from_object),
+                    &config.sampling.collision,
+                );
+                let collision_free = collision.is_free();
+                candidates.push(Datapoint {
+                    crop: crop_depth(&depth, w, h, image.center_px, image.angle_rad, &config.crop),
+                    grasp_depth_m: image.depth_m,
+                    theta_rad: theta_rad(camera),
+                    angle_rad: image.angle_rad,
+                    center_px: image.center_px,
+                    width_m: axis.contacts.width_m,
+                    robust_epsilon: quality.robust_epsilon as f32,
+                    robust_label: config
+                        .quality
+                        .dexnet_label(quality.robust_epsilon, collision_free),
+                    collision_free,
+                    force_closure: quality.nominal_force_closure,
+                    physics: -1,
+                    object_id,
+                    stable_pose: pose_index as u32,
+                    view: view as u32,
+                    grasp: grasp_index as u32,
+                    quality_seed: quality_seed(object_seed, pose_index, grasp_index),
+                    object_from_gripper: row_major(&object_from_gripper),
+                    table_from_object: row_major(&table_from_object),
+                    world_from_camera: row_major(&camera.world_from_camera),
+                });
+            }
+        }
+        if let Some(physics_object) = &physics_object {
+            run_physics(
+                &mut candidates,
+                physics_object,
+                &table_from_object,
+                object_seed,
+                config,
+                resolved,
+            )?;
+        }
+        points.extend(candidates);
+    }
+    Ok(points)
+}
+
+/// The gripper frame (object frame) on `axis` whose approach is the camera's optical axis
+/// turned to lie across the grasp axis, if that turn is at most `max_tilt_rad`.
+fn aligned_frame(
+    axis: &AntipodalAxis,
+    table_from_object: &Pose3,
+    optical_world: Vec3,
+    max_tilt_rad: f32,
+) -> Option<Pose3> {
+    let optical = table_from_object.inverse_transform_vector(optical_world);
+    let x = axis.axis();
+    let along = optical.dot(x);
+    if along.abs() > max_tilt_rad.sin() {
+        return None;
+    }
+    let z = (optical - x * along).normalize_or_zero();
+    if z == Vec3::ZERO {
+        return None;
+    }
+    // canonical_frame(angle) approaches along z0 cos(angle) + y0 sin(angle), where z0 and y0
+    // are its approach and y at angle 0.
+    let canonical = canonical_frame(axis.center, x, 0.0);
+    let z0 = canonical.transform_vector(Vec3::Z);
+    let y0 = canonical.transform_vector(Vec3::Y);
+    Some(canonical_frame(axis.center, x, z.dot(y0).atan2(z.dot(z0))))
+}
+
+/// Depth images of `mesh` at `table_from_object` on a table, one per camera.
+fn render_depths(
+    renderer: &Renderer,
+    mesh: &TriangleMesh,
+    table_from_object: &Pose3,
+    cameras: &[mvgrasp_geometry::Camera],
+) -> Result<Vec<Vec<f32>>> {
+    let positions: Vec<[f32; 3]> = mesh.vertices().iter().map(|v| v.to_array()).collect();
+    let h = TABLE_HALF_SIDE_M;
+    let table = [[-h, -h, 0.0], [h, -h, 0.0], [h, h, 0.0], [-h, h, 0.0]];
+    let inputs = [
+        MeshInput {
+            positions: &positions,
+            indices: mesh.triangles(),
+            sides: sides_of(mesh),
+            colors: Colors::Uniform([200, 200, 200]),
+            world_from_mesh: row_major(table_from_object),
+            instance_id: 1,
+        },
+        MeshInput {
+            positions: &table,
+            indices: &[[0, 1, 2], [0, 2, 3]],
+            sides: Sides::Both,
+            colors: Colors::Uniform([150, 150, 150]),
+            world_from_mesh: IDENTITY,
+            instance_id: 2,
+        },
+    ];
+    let scene = renderer.upload(&inputs)?;
+    let views: Vec<_> = cameras.iter().map(render_view).collect();
+    Ok(renderer
+        .render(&scene, &views)?
+        .into_iter()
+        .map(|frame| frame.depth_m)
+        .collect())
+}
+
+/// Runs a rapier trial for the chosen share of the collision-free datapoints (in parallel,
+/// each trial deterministic).
+fn run_physics(
+    points: &mut [Datapoint],
+    physics_object: &PhysicsObject,
+    table_from_object: &Pose3,
+    object_seed: u64,
+    config: &GraspDatasetConfig,
+    resolved: &Resolved,
+) -> Result<()> {
+    let threshold = (config.physics_fraction as f64 * u64::MAX as f64) as u64;
+    let chosen: Vec<usize> = points
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| {
+            p.collision_free
+                && seed_of(
+                    object_seed,
+                    PHYSICS,
+                    u64::from(p.stable_pose) << 32 | u64::from(p.view),
+                    u64::from(p.grasp),
+                ) <= threshold
+        })
+        .map(|(i, _)| i)
+        .collect();
+    let outcomes = chosen
+        .par_iter()
+        .map(|&i| {
+            let p = &points[i];
+            let object_from_gripper = crate::convert::pose_from_row_major(&p.object_from_gripper);
+            let grasp = Grasp {
+                world_from_gripper: *table_from_object * object_from_gripper,
+                width_m: p.width_m,
+            };
+            simulate_grasp(
+                physics_object,
+                table_from_object,
+                &grasp,
+                &resolved.gripper,
+                &config.physics,
+            )
+        })
+        .collect::<std::result::Result<Vec<_>, _>>()?;
+    for (&i, outcome) in chosen.iter().zip(outcomes) {
+        points[i].physics = i8::from(outcome.success);
+    }
+    Ok(())
+}

@@ -1,0 +1,296 @@
+//! Shards: safetensors files of datapoints, each with a JSON sidecar of its counts, written
+//! atomically (temporary file, then rename; the sidecar first, the shard last).
+//!
+//! Tensors of a shard with `N` datapoints and crops of side `S` (row-major, little-endian):
+//!
+//! | name | dtype | shape | meaning |
+//! |---|---|---|---|
+//! | `depth_crops` | F32 | N x S x S | grasp-centred, grasp-aligned depth crop, metres (0 = nothing) |
+//! | `grasp_depth_m` | F32 | N | depth of the grasp centre along the optical axis, metres |
+//! | `theta_rad` | F32 | N | angle between the optical axis and the table plane |
+//! | `angle_rad` | F32 | N | in-image angle of the grasp axis before the crop turned it |
+//! | `center_px` | F32 | N x 2 | grasp centre in the full image, pixels (u, v) |
+//! | `width_m` | F32 | N | distance between the contacts, metres |
+//! | `robust_epsilon` | F32 | N | robust Ferrari-Canny quality (mean over perturbations) |
+//! | `robust_label` | U8 | N | Dex-Net 2.0's label: robust_epsilon > threshold and collision-free |
+//! | `collision_free` | U8 | N | the open hand misses object and table along its approach |
+//! | `force_closure` | U8 | N | the nominal contacts are in force closure |
+//! | `physics` | I8 | N | rapier trial: 1 held, 0 failed, -1 not run |
+//! | `object_id` `stable_pose` `view` `grasp` | U32 | N | ids (object index in the manifest; pose, view, axis within it) |
+//! | `quality_seed` | U64 | N | seed of the robust-quality evaluation (see the manifest) |
+//! | `object_from_gripper` | F32 | N x 4 x 4 | the grasp in the object frame (approach along the view) |
+//! | `table_from_object` | F32 | N x 4 x 4 | the stable pose |
+//! | `world_from_camera` | F32 | N x 4 x 4 | the camera (world = table frame) |
+
+use std::path::{Path, PathBuf};
+
+use safetensors::Dtype;
+use safetensors::tensor::TensorView;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+
+/// One labelled grasp image.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Datapoint {
+    /// The crop, `size * size` values, row-major.
+    pub crop: Vec<f32>,
+    /// See the module docs for every field.
+    pub grasp_depth_m: f32,
+    /// See the module docs.
+    pub theta_rad: f32,
+    /// See the module docs.
+    pub angle_rad: f32,
+    /// See the module docs.
+    pub center_px: [f32; 2],
+    /// See the module docs.
+    pub width_m: f32,
+    /// See the module docs.
+    pub robust_epsilon: f32,
+    /// See the module docs.
+    pub robust_label: bool,
+    /// See the module docs.
+    pub collision_free: bool,
+    /// See the module docs.
+    pub force_closure: bool,
+    /// See the module docs.
+    pub physics: i8,
+    /// See the module docs.
+    pub object_id: u32,
+    /// See the module docs.
+    pub stable_pose: u32,
+    /// See the module docs.
+    pub view: u32,
+    /// See the module docs.
+    pub grasp: u32,
+    /// See the module docs.
+    pub quality_seed: u64,
+    /// Row-major 4x4.
+    pub object_from_gripper: [[f32; 4]; 4],
+    /// Row-major 4x4.
+    pub table_from_object: [[f32; 4]; 4],
+    /// Row-major 4x4.
+    pub world_from_camera: [[f32; 4]; 4],
+}
+
+/// A shard's counts, in its sidecar `shard_NNNNN.json`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ShardRecord {
+    /// Shard index.
+    pub index: usize,
+    /// The safetensors file, relative to the dataset folder.
+    pub file: String,
+    /// Ids of the objects it holds (a contiguous range).
+    pub objects: Vec<u32>,
+    /// Datapoints.
+    pub datapoints: usize,
+    /// Robust-label positives.
+    pub positives: usize,
+    /// Collision-free datapoints.
+    pub collision_free: usize,
+    /// Physics trials run, and how many held.
+    pub physics_trials: usize,
+    /// See `physics_trials`.
+    pub physics_held: usize,
+    /// Trials whose outcome matched the robust label.
+    pub physics_agree: usize,
+    /// Objects that gave no datapoint, with the reason.
+    pub empty_objects: Vec<(u32, String)>,
+}
+
+/// The shard's file name.
+pub fn shard_file(index: usize) -> String {
+    format!("shard_{index:05}.safetensors")
+}
+
+/// The sidecar's path.
+pub fn sidecar_path(dir: &Path, index: usize) -> PathBuf {
+    dir.join(format!("shard_{index:05}.json"))
+}
+
+fn bytes_f32(values: impl Iterator<Item = f32>) -> Vec<u8> {
+    values.flat_map(f32::to_le_bytes).collect()
+}
+
+fn bytes_u32(values: impl Iterator<Item = u32>) -> Vec<u8> {
+    values.flat_map(u32::to_le_bytes).collect()
+}
+
+/// Writes `points` as shard `record.index` in `dir`: the sidecar, then the shard, each through
+/// a temporary file and a rename.
+///
+/// # Errors
+/// [`Error::Io`] or [`Error::Dataset`] naming the file.
+pub fn write_shard(
+    dir: &Path,
+    points: &[Datapoint],
+    crop_size: usize,
+    record: &ShardRecord,
+) -> Result<()> {
+    let n = points.len();
+    let flat4 = |m: &[[f32; 4]; 4]| m.concat();
+    let columns: Vec<(&str, Dtype, Vec<usize>, Vec<u8>)> = vec![
+        (
+            "depth_crops",
+            Dtype::F32,
+            vec![n, crop_size, crop_size],
+            bytes_f32(points.iter().flat_map(|p| p.crop.iter().copied())),
+        ),
+        (
+            "grasp_depth_m",
+            Dtype::F32,
+            vec![n],
+            bytes_f32(points.iter().map(|p| p.grasp_depth_m)),
+        ),
+        (
+            "theta_rad",
+            Dtype::F32,
+            vec![n],
+            bytes_f32(points.iter().map(|p| p.theta_rad)),
+        ),
+        (
+            "angle_rad",
+            Dtype::F32,
+            vec![n],
+            bytes_f32(points.iter().map(|p| p.angle_rad)),
+        ),
+        (
+            "center_px",
+            Dtype::F32,
+            vec![n, 2],
+            bytes_f32(points.iter().flat_map(|p| p.center_px)),
+        ),
+        (
+            "width_m",
+            Dtype::F32,
+            vec![n],
+            bytes_f32(points.iter().map(|p| p.width_m)),
+        ),
+        (
+            "robust_epsilon",
+            Dtype::F32,
+            vec![n],
+            bytes_f32(points.iter().map(|p| p.robust_epsilon)),
+        ),
+        (
+            "robust_label",
+            Dtype::U8,
+            vec![n],
+            points.iter().map(|p| u8::from(p.robust_label)).collect(),
+        ),
+        (
+            "collision_free",
+            Dtype::U8,
+            vec![n],
+            points.iter().map(|p| u8::from(p.collision_free)).collect(),
+        ),
+        (
+            "force_closure",
+            Dtype::U8,
+            vec![n],
+            points.iter().map(|p| u8::from(p.force_closure)).collect(),
+        ),
+        (
+            "physics",
+            Dtype::I8,
+            vec![n],
+            points
+                .iter()
+                .flat_map(|p| p.physics.to_le_bytes())
+                .collect(),
+        ),
+        (
+            "object_id",
+            Dtype::U32,
+            vec![n],
+            bytes_u32(points.iter().map(|p| p.object_id)),
+        ),
+        (
+            "stable_pose",
+            Dtype::U32,
+            vec![n],
+            bytes_u32(points.iter().map(|p| p.stable_pose)),
+        ),
+        (
+            "view",
+            Dtype::U32,
+            vec![n],
+            bytes_u32(points.iter().map(|p| p.view)),
+        ),
+        (
+            "grasp",
+            Dtype::U32,
+            vec![n],
+            bytes_u32(points.iter().map(|p| p.grasp)),
+        ),
+        (
+            "quality_seed",
+            Dtype::U64,
+            vec![n],
+            points
+                .iter()
+                .flat_map(|p| p.quality_seed.to_le_bytes())
+                .collect(),
+        ),
+        (
+            "object_from_gripper",
+            Dtype::F32,
+            vec![n, 4, 4],
+            bytes_f32(points.iter().flat_map(|p| flat4(&p.object_from_gripper))),
+        ),
+        (
+            "table_from_object",
+            Dtype::F32,
+            vec![n, 4, 4],
+            bytes_f32(points.iter().flat_map(|p| flat4(&p.table_from_object))),
+        ),
+        (
+            "world_from_camera",
+            Dtype::F32,
+            vec![n, 4, 4],
+            bytes_f32(points.iter().flat_map(|p| flat4(&p.world_from_camera))),
+        ),
+    ];
+    let shard_path = dir.join(shard_file(record.index));
+    let views = columns
+        .iter()
+        .map(|(name, dtype, shape, data)| {
+            TensorView::new(*dtype, shape.clone(), data)
+                .map(|view| (*name, view))
+                .map_err(|e| Error::Dataset {
+                    detail: format!("{}: tensor {name}: {e}", shard_path.display()),
+                })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    // No metadata map: safetensors stores it from a HashMap, whose order would vary the bytes.
+    let bytes = safetensors::serialize(views, None).map_err(|e| Error::Dataset {
+        detail: format!("{}: {e}", shard_path.display()),
+    })?;
+    let sidecar = sidecar_path(dir, record.index);
+    write_atomically(
+        &sidecar,
+        (serde_json::to_string_pretty(record).map_err(|e| Error::Dataset {
+            detail: format!("{}: {e}", sidecar.display()),
+        })? + "\n")
+            .as_bytes(),
+    )?;
+    write_atomically(&shard_path, &bytes)
+}
+
+/// Writes `bytes` to `path` through `path.tmp` and a rename.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(".tmp");
+    let tmp = PathBuf::from(tmp);
+    std::fs::write(&tmp, bytes).map_err(Error::io("write", &tmp))?;
+    std::fs::rename(&tmp, path).map_err(Error::io("rename", &tmp))
+}
+
+/// A finished shard's sidecar, if the shard and its sidecar are both there.
+pub fn finished_shard(dir: &Path, index: usize) -> Option<ShardRecord> {
+    if !dir.join(shard_file(index)).is_file() {
+        return None;
+    }
+    let text = std::fs::read_to_string(sidecar_path(dir, index)).ok()?;
+    serde_json::from_str(&text).ok()
+}
