@@ -321,6 +321,7 @@ pub fn generate(
     let plan = DatasetPlan::new(sources, config)?;
     std::fs::create_dir_all(out).map_err(Error::io("create", out))?;
     plan.check_existing(out)?;
+    remove_temporary_files(out)?;
     plan.write_manifest(out)?;
     let bar = if progress {
         ProgressBar::new(sources.len() as u64)
@@ -350,4 +351,16 @@ pub fn generate(
     bar.finish_and_clear();
     summary.totals = plan.write_manifest(out)?.totals;
     Ok(summary)
+}
+
+/// Removes the `.tmp` files an interrupted run left (never a finished shard).
+fn remove_temporary_files(out: &Path) -> Result<()> {
+    let entries = std::fs::read_dir(out).map_err(Error::io("read", out))?;
+    for entry in entries.flatten() {
+        let path = entry.path();
+        if path.extension().is_some_and(|e| e == "tmp") {
+            std::fs::remove_file(&path).map_err(Error::io("remove", &path))?;
+        }
+    }
+    Ok(())
 }
