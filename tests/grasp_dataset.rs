@@ -213,7 +213,7 @@ fn shard_bytes(dir: &Path) -> Vec<(String, Vec<u8>)> {
     let mut files: Vec<_> = std::fs::read_dir(dir)
         .unwrap()
         .map(|e| e.unwrap().path())
-        .filter(|p| !p.extension().is_some_and(|e| e == "tmp"))
+        .filter(|p| p.extension().is_none_or(|e| e != "tmp"))
         .collect();
     files.sort();
     files
