@@ -8,11 +8,11 @@
 # It installs nothing from the network and assumes the tools are there (.ci/run installs them
 # on a fresh Debian machine):
 #   - cargo with the rustfmt and clippy components;
-#   - a Python >= 3.10 environment holding maturin>=1.16,<2, pytest, numpy and setuptools>=77.
+#   - a Python >= 3.10 environment holding maturin>=1.16,<2, pytest, numpy, setuptools>=77 and ray>=2.9.
 #
 # Python environment: the active virtualenv ($VIRTUAL_ENV) when there is one, else ./.venv at
 # the repository root (make it with .ci/run, or by hand:
-#   python3 -m venv .venv && .venv/bin/pip install 'maturin>=1.16,<2' pytest numpy 'setuptools>=77').
+#   python3 -m venv .venv && .venv/bin/pip install 'maturin>=1.16,<2' pytest numpy 'setuptools>=77' 'ray>=2.9').
 # The wheel is built into target/wheels/mvgrasp/ (emptied first; outside any venv) and installed
 # into that environment with --force-reinstall --no-deps; training/ is installed editable.
 #
@@ -81,6 +81,7 @@ wants = {
     "pytest": lambda v: True,
     "numpy": lambda v: True,
     "setuptools": lambda v: v >= (77, 0),
+    "ray": lambda v: v >= (2, 9),
 }
 bad = [name for name, ok in wants.items() if version(name) is None or not ok(version(name))]
 if sys.version_info < (3, 10):

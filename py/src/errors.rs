@@ -49,3 +49,12 @@ pub(crate) fn mesh_error(error: GeometryError) -> PyErr {
         _ => MeshError::new_err(error.to_string()),
     }
 }
+
+/// Maps a pipeline error: meshes are `MeshError`, cameras `CameraError`, the rest
+/// `MvGraspError`; always with the Rust message.
+pub(crate) fn pipeline_error(error: mvgrasp::Error) -> PyErr {
+    match error {
+        mvgrasp::Error::Geometry(e) => mesh_error(e),
+        other => MvGraspError::new_err(other.to_string()),
+    }
+}

@@ -9,6 +9,7 @@
 //! workspace's `default-members`, so a bare `cargo build` / `cargo test` needs no Python.
 
 mod errors;
+mod grasp_dataset;
 mod mesh;
 
 /// The native half of the `mvgrasp` package; import `mvgrasp`, not this module.
@@ -18,6 +19,10 @@ mod native {
 
     #[pymodule_export]
     use crate::errors::{CameraError, MeshError, MvGraspError, WeightsError};
+    #[pymodule_export]
+    use crate::grasp_dataset::{
+        generate_grasp_shard, grasp_dataset_num_shards, write_grasp_manifest,
+    };
     #[pymodule_export]
     use crate::mesh::load_mesh;
 

@@ -33,3 +33,34 @@ def load_mesh(
             or an implausible size (largest extent outside 5 mm .. 2 m after scaling).
         ValueError: ``scale`` is not a finite number > 0.
     """
+
+def grasp_dataset_num_shards(
+    config: str | None = None,
+    meshes: list[str] | None = None,
+    per_category: int = 1,
+    categories: list[str] | None = None,
+    library_seed: int = 0,
+) -> int:
+    """How many shards the grasp dataset has."""
+
+def generate_grasp_shard(
+    out: str,
+    shard: int,
+    config: str | None = None,
+    meshes: list[str] | None = None,
+    per_category: int = 1,
+    categories: list[str] | None = None,
+    library_seed: int = 0,
+    backend: str = "auto",
+) -> str:
+    """Makes one shard (skipped when finished); its record as JSON text."""
+
+def write_grasp_manifest(
+    out: str,
+    config: str | None = None,
+    meshes: list[str] | None = None,
+    per_category: int = 1,
+    categories: list[str] | None = None,
+    library_seed: int = 0,
+) -> str:
+    """Writes ``out/dataset.json`` from the finished shards; the manifest as JSON text."""

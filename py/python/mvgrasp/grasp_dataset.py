@@ -1,0 +1,103 @@
+"""Grasp datasets: labelled grasp crops as safetensors shards with a JSON manifest.
+
+The Rust generator does the work; these functions make one shard, count the shards, and write
+the manifest, so that shards can be spread over processes or machines
+(:mod:`mvgrasp.ray_launcher`). Every shard depends only on the config and the object list, so
+any split of the shards writes the same bytes as one machine making them all.
+
+Objects are mesh files or folders (``meshes``), or, when ``meshes`` is None, the built-in
+library (``per_category`` objects of each of ``categories``, default all).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Sequence
+from typing import Any, Optional, Union
+
+from mvgrasp import _native
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+def _objects(
+    meshes: Optional[Sequence[PathLike]],
+    per_category: int,
+    categories: Optional[Sequence[str]],
+    library_seed: int,
+) -> dict[str, Any]:
+    return {
+        "meshes": None if meshes is None else [os.fspath(m) for m in meshes],
+        "per_category": per_category,
+        "categories": None if categories is None else list(categories),
+        "library_seed": library_seed,
+    }
+
+
+def num_shards(
+    config: Optional[PathLike] = None,
+    meshes: Optional[Sequence[PathLike]] = None,
+    per_category: int = 1,
+    categories: Optional[Sequence[str]] = None,
+    library_seed: int = 0,
+) -> int:
+    """How many shards the dataset has (``objects_per_shard`` objects each)."""
+    return _native.grasp_dataset_num_shards(
+        None if config is None else os.fspath(config),
+        **_objects(meshes, per_category, categories, library_seed),
+    )
+
+
+def generate_shard(
+    out: PathLike,
+    shard: int,
+    config: Optional[PathLike] = None,
+    meshes: Optional[Sequence[PathLike]] = None,
+    per_category: int = 1,
+    categories: Optional[Sequence[str]] = None,
+    library_seed: int = 0,
+    backend: str = "auto",
+) -> dict[str, Any]:
+    """Makes shard ``shard`` in ``out`` (skipped when already finished); returns its record
+    (object ids, datapoints, positives, physics counts). The GIL is released while it runs."""
+    text = _native.generate_grasp_shard(
+        os.fspath(out),
+        shard,
+        None if config is None else os.fspath(config),
+        backend=backend,
+        **_objects(meshes, per_category, categories, library_seed),
+    )
+    return json.loads(text)
+
+
+def write_manifest(
+    out: PathLike,
+    config: Optional[PathLike] = None,
+    meshes: Optional[Sequence[PathLike]] = None,
+    per_category: int = 1,
+    categories: Optional[Sequence[str]] = None,
+    library_seed: int = 0,
+) -> dict[str, Any]:
+    """Writes ``out/dataset.json`` from the shards finished in ``out``; returns it."""
+    text = _native.write_grasp_manifest(
+        os.fspath(out),
+        None if config is None else os.fspath(config),
+        **_objects(meshes, per_category, categories, library_seed),
+    )
+    return json.loads(text)
+
+
+def generate(
+    out: PathLike,
+    config: Optional[PathLike] = None,
+    meshes: Optional[Sequence[PathLike]] = None,
+    per_category: int = 1,
+    categories: Optional[Sequence[str]] = None,
+    library_seed: int = 0,
+) -> dict[str, Any]:
+    """Makes every shard on this machine, one after another; returns the manifest."""
+    objects = _objects(meshes, per_category, categories, library_seed)
+    for shard in range(num_shards(config, **objects)):
+        generate_shard(out, shard, config, **objects)
+    return write_manifest(out, config, **objects)

@@ -1,0 +1,105 @@
+//! Grasp-dataset shards for Python and for many machines (the Ray launcher calls these).
+
+use std::path::PathBuf;
+
+use mvgrasp::cli::LibraryArgs;
+use mvgrasp::grasp_dataset::{DatasetPlan, GraspDatasetConfig, generate_shard};
+use mvgrasp::render::{Backend, Renderer};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+
+use crate::errors::pipeline_error;
+
+/// The plan of a dataset: its config (a TOML file, or the defaults) and objects (mesh files or
+/// folders, or the built-in library).
+fn plan(
+    config: Option<PathBuf>,
+    meshes: Option<Vec<PathBuf>>,
+    per_category: u32,
+    categories: Option<Vec<String>>,
+    library_seed: u64,
+) -> PyResult<DatasetPlan> {
+    let config = match config {
+        Some(path) => GraspDatasetConfig::from_file(&path).map_err(pipeline_error)?,
+        None => GraspDatasetConfig::default(),
+    };
+    let categories = categories
+        .unwrap_or_default()
+        .iter()
+        .map(|c| c.parse().map_err(|e| PyValueError::new_err(format!("{e}"))))
+        .collect::<PyResult<Vec<_>>>()?;
+    let library = LibraryArgs {
+        mesh: meshes.unwrap_or_default(),
+        per_category,
+        categories,
+        library_seed,
+    };
+    let sources = library.sources().map_err(PyValueError::new_err)?;
+    DatasetPlan::new(&sources, &config).map_err(pipeline_error)
+}
+
+/// How many shards the dataset has.
+#[pyfunction]
+#[pyo3(signature = (config = None, meshes = None, per_category = 1, categories = None, library_seed = 0))]
+pub(crate) fn grasp_dataset_num_shards(
+    config: Option<PathBuf>,
+    meshes: Option<Vec<PathBuf>>,
+    per_category: u32,
+    categories: Option<Vec<String>>,
+    library_seed: u64,
+) -> PyResult<usize> {
+    Ok(plan(config, meshes, per_category, categories, library_seed)?.num_shards())
+}
+
+/// Makes shard `shard` in `out` (skipped when finished); its record as JSON text.
+#[pyfunction]
+#[pyo3(signature = (out, shard, config = None, meshes = None, per_category = 1, categories = None, library_seed = 0, backend = "auto"))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn generate_grasp_shard(
+    py: Python<'_>,
+    out: PathBuf,
+    shard: usize,
+    config: Option<PathBuf>,
+    meshes: Option<Vec<PathBuf>>,
+    per_category: u32,
+    categories: Option<Vec<String>>,
+    library_seed: u64,
+    backend: &str,
+) -> PyResult<String> {
+    let plan = plan(config, meshes, per_category, categories, library_seed)?;
+    let backend = Backend::parse(backend).ok_or_else(|| {
+        PyValueError::new_err(format!(
+            "unknown backend {backend:?} (expected auto, vulkan, gl, metal, dx12)"
+        ))
+    })?;
+    let record = py.detach(|| -> mvgrasp::Result<_> {
+        std::fs::create_dir_all(&out).map_err(|source| mvgrasp::Error::Io {
+            op: "create",
+            source,
+            path: out.clone(),
+        })?;
+        let renderer = Renderer::new(backend)?;
+        generate_shard(&renderer, &plan, &out, shard)
+    });
+    let record = record.map_err(pipeline_error)?;
+    serde_json::to_string(&record).map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
+/// Writes `out/dataset.json` from the shards finished there; the manifest as JSON text.
+#[pyfunction]
+#[pyo3(signature = (out, config = None, meshes = None, per_category = 1, categories = None, library_seed = 0))]
+pub(crate) fn write_grasp_manifest(
+    py: Python<'_>,
+    out: PathBuf,
+    config: Option<PathBuf>,
+    meshes: Option<Vec<PathBuf>>,
+    per_category: u32,
+    categories: Option<Vec<String>>,
+    library_seed: u64,
+) -> PyResult<String> {
+    let plan = plan(config, meshes, per_category, categories, library_seed)?;
+    let manifest = py
+        .detach(|| plan.write_manifest(&out))
+        .map_err(pipeline_error)?;
+    serde_json::to_string(&manifest).map_err(|e| PyValueError::new_err(e.to_string()))
+}
