@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! cargo run --release --bin grasp_dataset -- --out DIR [--config FILE.toml] [--seed S]
-//!     [--mesh PATH ...] [--per-category N] [--shard K] [--backend B] [--quiet]
+//!     [--mesh PATH ...] [--per-category N] [--shard K] [--preview PNG] [--backend B] [--quiet]
 //! ```
 
 use std::path::PathBuf;
@@ -13,6 +13,7 @@ use std::time::Instant;
 
 use clap::Parser;
 use mvgrasp::cli::LibraryArgs;
+use mvgrasp::grasp_dataset::preview::write_preview;
 use mvgrasp::grasp_dataset::{DatasetPlan, GraspDatasetConfig, generate, generate_shard};
 use mvgrasp::render::{Backend, Renderer};
 
@@ -37,6 +38,10 @@ struct Args {
     /// Graphics backend: auto, vulkan, gl, metal, dx12 (or MVGRASP_RENDER_BACKEND).
     #[arg(long, default_value = "auto")]
     backend: String,
+    /// Also draw a preview of the dataset's crops here (PNG: positives on top, negatives
+    /// below).
+    #[arg(long)]
+    preview: Option<PathBuf>,
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
@@ -93,6 +98,9 @@ fn run(args: &Args) -> Result<(), String> {
         }
     };
     let seconds = started.elapsed().as_secs_f64();
+    if let Some(png) = &args.preview {
+        write_preview(&args.out, png, 24, 12).map_err(|e| e.to_string())?;
+    }
     let rate = |n: usize, of: usize| {
         if of == 0 {
             0.0
@@ -102,13 +110,14 @@ fn run(args: &Args) -> Result<(), String> {
     };
     println!(
         "{} datapoints ({:.1}% positive, {:.1}% collision-free), {} physics trials ({:.1}% held, \
-         {:.1}% agree with the robust label), {:.1} s: {}",
+         {:.1}% of the {} that reached the grasp agree with the robust label), {:.1} s: {}",
         totals.datapoints,
         rate(totals.positives, totals.datapoints),
         rate(totals.collision_free, totals.datapoints),
         totals.physics_trials,
         rate(totals.physics_held, totals.physics_trials),
-        rate(totals.physics_agree, totals.physics_trials),
+        rate(totals.physics_agree, totals.physics_tested),
+        totals.physics_tested,
         seconds,
         args.out.display()
     );

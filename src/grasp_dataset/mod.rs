@@ -28,6 +28,7 @@ pub mod config;
 pub mod crop;
 pub mod noise;
 mod object;
+pub mod preview;
 pub mod shard;
 
 pub use config::{
@@ -39,6 +40,7 @@ pub use shard::{Datapoint, ShardRecord};
 use std::path::Path;
 
 use indicatif::{ProgressBar, ProgressStyle};
+use mvgrasp_grasp::physics::FailureStage;
 use mvgrasp_render::Renderer;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -96,7 +98,9 @@ pub struct Totals {
     pub physics_trials: usize,
     /// Trials that held the object.
     pub physics_held: usize,
-    /// Trials whose outcome matched the robust label.
+    /// Trials that got as far as the grasp (the object did not topple while settling).
+    pub physics_tested: usize,
+    /// Of those, trials whose outcome matched the robust label.
     pub physics_agree: usize,
 }
 
@@ -107,6 +111,7 @@ impl Totals {
         self.collision_free += r.collision_free;
         self.physics_trials += r.physics_trials;
         self.physics_held += r.physics_held;
+        self.physics_tested += r.physics_tested;
         self.physics_agree += r.physics_agree;
     }
 }
@@ -141,21 +146,16 @@ impl DatasetPlan {
                 detail: "no objects to make a grasp dataset of".into(),
             });
         }
-        let mut names: Vec<String> = sources.iter().map(ObjectSource::name).collect();
-        names.sort();
-        if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
-            return Err(Error::Dataset {
-                detail: format!("two objects are named {:?}; rename one file", w[0]),
-            });
-        }
+        let names = unique_names(sources)?;
         let objects = sources
             .iter()
+            .zip(names)
             .enumerate()
-            .map(|(id, source)| {
+            .map(|(id, (source, name))| {
                 (
                     ManifestObject {
                         id: id as u32,
-                        name: source.name(),
+                        name,
                         source: source.describe(),
                     },
                     source.clone(),
@@ -299,7 +299,15 @@ pub fn generate_shard(
     let trials = points.iter().filter(|p| p.physics >= 0);
     record.physics_trials = trials.clone().count();
     record.physics_held = trials.clone().filter(|p| p.physics == 1).count();
-    record.physics_agree = trials
+    for p in trials.clone() {
+        if let Some(stage) = FailureStage::ALL.get(p.physics_stage as usize) {
+            record.physics_failures.count(*stage);
+        }
+    }
+    // A trial whose object toppled before the gripper came tested the pose, not the grasp.
+    let tested = trials.filter(|p| p.physics_stage != FailureStage::Settle as i8);
+    record.physics_tested = tested.clone().count();
+    record.physics_agree = tested
         .filter(|p| (p.physics == 1) == p.robust_label)
         .count();
     write_shard(out, &points, plan.config.crop.size_px as usize, &record)?;
@@ -353,6 +361,28 @@ pub fn generate(
     Ok(summary)
 }
 
+/// Reads `dir/dataset.json`.
+///
+/// # Errors
+/// [`Error::Config`] naming the file when it is missing or not a grasp-dataset manifest.
+pub fn read_manifest(dir: &Path) -> Result<Manifest> {
+    let path = dir.join("dataset.json");
+    let fail = |detail: String| Error::Config {
+        detail,
+        path: path.clone(),
+    };
+    let text = std::fs::read_to_string(&path).map_err(|e| fail(e.to_string()))?;
+    let manifest: Manifest = serde_json::from_str(&text)
+        .map_err(|e| fail(format!("not a grasp-dataset manifest: {e}")))?;
+    if manifest.format != FORMAT {
+        return Err(fail(format!(
+            "format {:?}, expected {FORMAT:?}",
+            manifest.format
+        )));
+    }
+    Ok(manifest)
+}
+
 /// Removes the `.tmp` files an interrupted run left (never a finished shard).
 fn remove_temporary_files(out: &Path) -> Result<()> {
     let entries = std::fs::read_dir(out).map_err(Error::io("read", out))?;
@@ -363,4 +393,44 @@ fn remove_temporary_files(out: &Path) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// Each object's name: its own ([`ObjectSource::name`]), or for files whose stems repeat
+/// (`cube.obj` in two folders), the stem prefixed by as many parent folders as it takes.
+fn unique_names(sources: &[ObjectSource]) -> Result<Vec<String>> {
+    let name_with_parents = |source: &ObjectSource, parents: usize| match source {
+        ObjectSource::File(path) if parents > 0 => {
+            let mut parts: Vec<String> = path
+                .with_extension("")
+                .components()
+                .rev()
+                .take(parents + 1)
+                .map(|c| c.as_os_str().to_string_lossy().into_owned())
+                .collect();
+            parts.reverse();
+            parts.join("/")
+        }
+        _ => source.name(),
+    };
+    let mut depth = vec![0usize; sources.len()];
+    for _ in 0..8 {
+        let names: Vec<String> = sources
+            .iter()
+            .zip(&depth)
+            .map(|(s, &d)| name_with_parents(s, d))
+            .collect();
+        let mut clashing = false;
+        for i in 0..names.len() {
+            if names.iter().filter(|n| **n == names[i]).count() > 1 {
+                depth[i] += 1;
+                clashing = true;
+            }
+        }
+        if !clashing {
+            return Ok(names);
+        }
+    }
+    Err(Error::Dataset {
+        detail: "objects with the same name and path; list each file once".into(),
+    })
 }

@@ -161,6 +161,7 @@ pub(crate) fn object_datapoints(
                     collision_free,
                     force_closure: quality.nominal_force_closure,
                     physics: -1,
+                    physics_stage: -1,
                     object_id,
                     stable_pose: pose_index as u32,
                     view: view as u32,
@@ -295,6 +296,7 @@ fn run_physics(
         .collect::<std::result::Result<Vec<_>, _>>()?;
     for (&i, outcome) in chosen.iter().zip(outcomes) {
         points[i].physics = i8::from(outcome.success);
+        points[i].physics_stage = outcome.failed_at.map_or(-1, |stage| stage as i8);
     }
     Ok(())
 }

@@ -16,6 +16,7 @@
 //! | `collision_free` | U8 | N | the open hand misses object and table along its approach |
 //! | `force_closure` | U8 | N | the nominal contacts are in force closure |
 //! | `physics` | I8 | N | rapier trial: 1 held, 0 failed, -1 not run |
+//! | `physics_stage` | I8 | N | stage a trial failed at: 0 settle, 1 approach, 2 close, 3 lift, 4 shake; -1 none |
 //! | `object_id` `stable_pose` `view` `grasp` | U32 | N | ids (object index in the manifest; pose, view, axis within it) |
 //! | `quality_seed` | U64 | N | seed of the robust-quality evaluation (see the manifest) |
 //! | `object_from_gripper` | F32 | N x 4 x 4 | the grasp in the object frame (approach along the view) |
@@ -56,6 +57,8 @@ pub struct Datapoint {
     /// See the module docs.
     pub physics: i8,
     /// See the module docs.
+    pub physics_stage: i8,
+    /// See the module docs.
     pub object_id: u32,
     /// See the module docs.
     pub stable_pose: u32,
@@ -92,8 +95,12 @@ pub struct ShardRecord {
     pub physics_trials: usize,
     /// See `physics_trials`.
     pub physics_held: usize,
-    /// Trials whose outcome matched the robust label.
+    /// Trials that got as far as the grasp (the object did not topple while settling).
+    pub physics_tested: usize,
+    /// Of those, trials whose outcome matched the robust label.
     pub physics_agree: usize,
+    /// Failed trials by stage.
+    pub physics_failures: mvgrasp_grasp::physics::StageCounts,
     /// Objects that gave no datapoint, with the reason.
     pub empty_objects: Vec<(u32, String)>,
 }
@@ -189,6 +196,15 @@ pub fn write_shard(
             Dtype::U8,
             vec![n],
             points.iter().map(|p| u8::from(p.force_closure)).collect(),
+        ),
+        (
+            "physics_stage",
+            Dtype::I8,
+            vec![n],
+            points
+                .iter()
+                .flat_map(|p| p.physics_stage.to_le_bytes())
+                .collect(),
         ),
         (
             "physics",

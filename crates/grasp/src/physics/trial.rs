@@ -33,6 +33,15 @@ pub enum FailureStage {
 }
 
 impl FailureStage {
+    /// Every stage, in the order a trial runs them (`stage as usize` indexes this).
+    pub const ALL: [FailureStage; 5] = [
+        Self::Settle,
+        Self::Approach,
+        Self::Close,
+        Self::Lift,
+        Self::Shake,
+    ];
+
     /// The stage's name, as in JSON.
     pub fn name(self) -> &'static str {
         match self {
