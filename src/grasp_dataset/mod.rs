@@ -395,16 +395,18 @@ fn remove_temporary_files(out: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Each object's name: its own ([`ObjectSource::name`]), or for files whose stems repeat
-/// (`cube.obj` in two folders), the stem prefixed by as many parent folders as it takes.
+/// Each object's name: its own ([`ObjectSource::name`]), or for files whose stems repeat the
+/// file name with its extension (`bottle.obj`, `bottle.stl`), then prefixed by as many parent
+/// folders as it takes (`pybullet/cube.obj`, `toys/cube.obj`).
 fn unique_names(sources: &[ObjectSource]) -> Result<Vec<String>> {
     let name_with_parents = |source: &ObjectSource, parents: usize| match source {
         ObjectSource::File(path) if parents > 0 => {
+            // One level up is the file name with its extension (bottle.obj, bottle.stl),
+            // then its folders.
             let mut parts: Vec<String> = path
-                .with_extension("")
                 .components()
                 .rev()
-                .take(parents + 1)
+                .take(parents)
                 .map(|c| c.as_os_str().to_string_lossy().into_owned())
                 .collect();
             parts.reverse();
@@ -433,4 +435,32 @@ fn unique_names(sources: &[ObjectSource]) -> Result<Vec<String>> {
     Err(Error::Dataset {
         detail: "objects with the same name and path; list each file once".into(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    #[test]
+    fn repeated_stems_are_told_apart_by_extension_then_folders() {
+        let files = [
+            "a/meshes/bottle.obj",
+            "a/meshes/bottle.stl",
+            "b/toys/cube.obj",
+            "b/cube.obj",
+            "c/mug.obj",
+        ];
+        let sources: Vec<ObjectSource> = files
+            .iter()
+            .map(|f| ObjectSource::File(PathBuf::from(f)))
+            .collect();
+        let names = unique_names(&sources).unwrap();
+        assert_eq!(
+            names,
+            ["bottle.obj", "bottle.stl", "toys/cube.obj", "b/cube.obj", "mug"]
+        );
+        let twice = [sources[4].clone(), sources[4].clone()];
+        assert!(unique_names(&twice).is_err());
+    }
 }
