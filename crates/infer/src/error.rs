@@ -26,6 +26,28 @@ pub enum InferError {
         /// The shape it got.
         got: Vec<usize>,
     },
+    /// An op's parameter is out of its range (a zero stride, a negative epsilon, ...).
+    #[error("{op}: {name} = {value}, expected {expected}")]
+    InvalidParameter {
+        /// The operation.
+        op: &'static str,
+        /// The parameter's name.
+        name: &'static str,
+        /// The value given, as text.
+        value: String,
+        /// What the op needs, in words ("at least 1").
+        expected: &'static str,
+    },
+    /// An axis beyond a tensor's rank.
+    #[error("{op}: axis {axis} is out of range for a tensor of rank {rank}")]
+    AxisOutOfRange {
+        /// The operation.
+        op: &'static str,
+        /// The axis asked for.
+        axis: usize,
+        /// The tensor's rank.
+        rank: usize,
+    },
 }
 
 /// `Result` with [`InferError`].

@@ -1,8 +1,13 @@
 #![doc = include_str!("../README.md")]
 
 pub mod error;
+mod gemm;
 pub mod ops;
+pub mod parallel;
 pub mod tensor;
+#[cfg(test)]
+mod testing;
 
 pub use error::{InferError, Result};
+pub use parallel::Parallelism;
 pub use tensor::Tensor;

@@ -3,10 +3,22 @@
 use crate::error::{InferError, Result};
 
 /// A dense row-major f32 tensor (NCHW for images, as torch).
+///
+/// The default tensor is empty (shape `[0]`): a ready output buffer for the ops' `_into` forms,
+/// which give it the shape they need and keep its allocation from call to call.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Tensor {
     shape: Vec<usize>,
     data: Vec<f32>,
+}
+
+impl Default for Tensor {
+    fn default() -> Self {
+        Self {
+            shape: vec![0],
+            data: Vec::new(),
+        }
+    }
 }
 
 impl Tensor {
@@ -32,15 +44,35 @@ impl Tensor {
 
     /// A tensor of zeros.
     pub fn zeros(shape: &[usize]) -> Self {
+        Self::full(shape, 0.0)
+    }
+
+    /// A tensor with every value `value`.
+    pub fn full(shape: &[usize], value: f32) -> Self {
         Self {
             shape: shape.to_vec(),
-            data: vec![0.0; shape.iter().product()],
+            data: vec![value; shape.iter().product()],
         }
     }
 
     /// The shape.
     pub fn shape(&self) -> &[usize] {
         &self.shape
+    }
+
+    /// The number of axes.
+    pub fn rank(&self) -> usize {
+        self.shape.len()
+    }
+
+    /// The number of values (the product of the shape).
+    pub fn len(&self) -> usize {
+        self.data.len()
+    }
+
+    /// Whether the tensor holds no values.
+    pub fn is_empty(&self) -> bool {
+        self.data.is_empty()
     }
 
     /// The values, row-major.
@@ -51,5 +83,77 @@ impl Tensor {
     /// The values, row-major, mutable.
     pub fn data_mut(&mut self) -> &mut [f32] {
         &mut self.data
+    }
+
+    /// The values, row-major, by value.
+    pub fn into_data(self) -> Vec<f32> {
+        self.data
+    }
+
+    /// Gives the tensor a new shape with the same number of values, in place (torch's
+    /// `reshape` of a contiguous tensor; `[N, C, H, W]` to `[N, C * H * W]` flattens as torch
+    /// does).
+    ///
+    /// # Errors
+    /// [`InferError::DataLength`] when `shape` needs another number of values.
+    pub fn reshape(&mut self, shape: &[usize]) -> Result<()> {
+        let expected = shape.iter().product::<usize>();
+        if expected != self.data.len() {
+            return Err(InferError::DataLength {
+                op: "reshape",
+                shape: shape.to_vec(),
+                expected,
+                got: self.data.len(),
+            });
+        }
+        self.shape.clear();
+        self.shape.extend_from_slice(shape);
+        Ok(())
+    }
+
+    /// Gives the tensor `shape`, keeping its allocation when that is big enough: how the ops'
+    /// `_into` forms size their output. The values afterwards are unspecified (old values or
+    /// zeros); the ops overwrite every one.
+    pub fn resize(&mut self, shape: &[usize]) {
+        self.shape.clear();
+        self.shape.extend_from_slice(shape);
+        self.data.resize(shape.iter().product(), 0.0);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use super::*;
+
+    #[test]
+    fn tensors_check_their_length() {
+        let err = Tensor::new(&[2, 3], vec![0.0; 5]).unwrap_err();
+        assert!(err.to_string().contains("[2, 3]"), "{err}");
+    }
+
+    #[test]
+    fn reshape_keeps_the_values_and_checks_the_count() {
+        let mut t = Tensor::new(&[1, 2, 2, 1], vec![1.0, 2.0, 3.0, 4.0]).unwrap();
+        t.reshape(&[1, 4]).unwrap();
+        assert_eq!(t.shape(), [1, 4]);
+        assert_eq!(t.data(), [1.0, 2.0, 3.0, 4.0]);
+        assert!(t.reshape(&[3]).is_err());
+        assert_eq!(
+            t.shape(),
+            [1, 4],
+            "a failed reshape leaves the tensor alone"
+        );
+    }
+
+    #[test]
+    fn resize_reuses_the_allocation() {
+        let mut t = Tensor::zeros(&[4, 4]);
+        let before = t.data().as_ptr();
+        t.resize(&[2, 3]);
+        assert_eq!((t.shape(), t.len()), (&[2, 3][..], 6));
+        assert_eq!(t.data().as_ptr(), before);
+        assert!(Tensor::default().is_empty());
     }
 }
