@@ -458,7 +458,13 @@ mod tests {
         let names = unique_names(&sources).unwrap();
         assert_eq!(
             names,
-            ["bottle.obj", "bottle.stl", "toys/cube.obj", "b/cube.obj", "mug"]
+            [
+                "bottle.obj",
+                "bottle.stl",
+                "toys/cube.obj",
+                "b/cube.obj",
+                "mug"
+            ]
         );
         let twice = [sources[4].clone(), sources[4].clone()];
         assert!(unique_names(&twice).is_err());
