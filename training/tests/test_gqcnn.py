@@ -1,0 +1,51 @@
+"""The torch GQ-CNNs: shapes, the description Rust rebuilds them from, and Dex-Net's LRN."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+
+from mvgrasp_training.gqcnn import ARCHITECTURES, GQCNN, dexnet2  # noqa: E402
+
+
+@pytest.mark.parametrize("name", sorted(ARCHITECTURES))
+@pytest.mark.parametrize("pose_inputs", [1, 2])
+def test_logits_have_the_batch_shape(name: str, pose_inputs: int) -> None:
+    net = GQCNN(ARCHITECTURES[name](pose_inputs=pose_inputs))
+    logits = net(torch.rand(5, 1, 32, 32), torch.rand(5, pose_inputs))
+    assert logits.shape == (5, 2)
+    assert torch.isfinite(logits).all()
+
+
+def test_the_description_is_json_and_names_every_layer() -> None:
+    arch = dexnet2(pose_inputs=2)
+    text = json.dumps(arch.describe())
+    back = json.loads(text)
+    assert [c["kernel"] for c in back["convs"]] == [7, 5, 3, 3]
+    assert back["image_fc"] == 1024 and back["pose_fc"] == 16 and back["merge_fc"] == 1024
+    assert back["pose_inputs"] == 2
+
+
+def test_dexnet2_parameter_count_matches_its_layers() -> None:
+    net = GQCNN(dexnet2())
+    convs = (7 * 7 * 1 + 1) * 64 + (5 * 5 * 64 + 1) * 64 + 2 * (3 * 3 * 64 + 1) * 64
+    fcs = (64 * 8 * 8 + 1) * 1024 + (1 + 1) * 16 + (1024 + 16 + 1) * 1024 + (1024 + 1) * 2
+    assert sum(p.numel() for p in net.parameters()) == convs + fcs
+
+
+def test_the_lrn_is_tensorflows_with_depth_radius_2() -> None:
+    # TensorFlow: b_c = a_c / (bias + alpha * sum_{|d - c| <= r} a_d^2) ** beta.
+    arch = dexnet2()
+    a = np.random.default_rng(0).normal(size=(2, 9, 4, 4)).astype(np.float64)
+    r, alpha, beta, bias = 2, 2e-5, 0.75, 1.0
+    expected = np.empty_like(a)
+    for c in range(a.shape[1]):
+        window = a[:, max(0, c - r) : c + r + 1]
+        expected[:, c] = a[:, c] / (bias + alpha * (window**2).sum(axis=1)) ** beta
+    lrn = torch.nn.LocalResponseNorm(arch.lrn_size, arch.lrn_alpha, arch.lrn_beta, arch.lrn_k)
+    got = lrn(torch.from_numpy(a)).numpy()
+    assert np.allclose(got, expected, rtol=1e-10, atol=1e-12)
