@@ -97,6 +97,11 @@ ARCHITECTURES = {"dexnet2": dexnet2, "small": small}
 class GQCNN(nn.Module):
     """A GQ-CNN: ``forward(depth [N, 1, S, S], pose [N, pose_inputs]) -> logits [N, 2]``.
 
+    Tensor names (what the Rust runtime loads): ``convs.{i}.weight`` / ``.bias``,
+    ``image_fc``, ``pose_fc``, ``merge_fc`` and ``out`` (``.weight`` [out, in], ``.bias``), and
+    the normalisation buffers below. Each convolution is followed by ReLU, then LRN and a max
+    pool where its spec says so.
+
     The buffers ``image_mean``, ``image_std``, ``pose_mean`` and ``pose_std`` normalise the
     inputs; set them from the training set before training (:meth:`set_normalisation`).
     """
@@ -104,20 +109,13 @@ class GQCNN(nn.Module):
     def __init__(self, arch: Architecture) -> None:
         super().__init__()
         self.arch = arch
-        layers: list[nn.Module] = []
+        self.convs = nn.ModuleList()
         channels, size = 1, arch.image_size_px
         for c in arch.convs:
-            layers.append(nn.Conv2d(channels, c.filters, c.kernel, padding=c.kernel // 2))
-            layers.append(nn.ReLU())
-            if c.lrn:
-                layers.append(
-                    nn.LocalResponseNorm(arch.lrn_size, arch.lrn_alpha, arch.lrn_beta, arch.lrn_k)
-                )
-            if c.pool > 1:
-                layers.append(nn.MaxPool2d(c.pool, c.pool))
-                size //= c.pool
+            self.convs.append(nn.Conv2d(channels, c.filters, c.kernel, padding=c.kernel // 2))
+            size //= c.pool
             channels = c.filters
-        self.image_stream = nn.Sequential(*layers)
+        self.lrn = nn.LocalResponseNorm(arch.lrn_size, arch.lrn_alpha, arch.lrn_beta, arch.lrn_k)
         self.image_fc = nn.Linear(channels * size * size, arch.image_fc)
         self.pose_fc = nn.Linear(arch.pose_inputs, arch.pose_fc)
         self.merge_fc = nn.Linear(arch.image_fc + arch.pose_fc, arch.merge_fc)
@@ -138,7 +136,13 @@ class GQCNN(nn.Module):
 
     def forward(self, depth: torch.Tensor, pose: torch.Tensor) -> torch.Tensor:
         x = (depth - self.image_mean) / self.image_std
-        x = self.image_stream(x).flatten(1)
+        for spec, conv in zip(self.arch.convs, self.convs):
+            x = torch.relu(conv(x))
+            if spec.lrn:
+                x = self.lrn(x)
+            if spec.pool > 1:
+                x = nn.functional.max_pool2d(x, spec.pool, spec.pool)
+        x = x.flatten(1)
         x = torch.relu(self.image_fc(x))
         p = torch.relu(self.pose_fc((pose - self.pose_mean) / self.pose_std))
         m = torch.relu(self.merge_fc(torch.cat([x, p], dim=1)))

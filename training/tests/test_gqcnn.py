@@ -49,3 +49,20 @@ def test_the_lrn_is_tensorflows_with_depth_radius_2() -> None:
     lrn = torch.nn.LocalResponseNorm(arch.lrn_size, arch.lrn_alpha, arch.lrn_beta, arch.lrn_k)
     got = lrn(torch.from_numpy(a)).numpy()
     assert np.allclose(got, expected, rtol=1e-10, atol=1e-12)
+
+
+def test_export_writes_every_tensor_and_the_description(tmp_path) -> None:
+    from safetensors.torch import load_file
+
+    from mvgrasp_training.export import export_gqcnn
+
+    net = GQCNN(ARCHITECTURES["small"](pose_inputs=2))
+    net.set_normalisation(0.6, 0.03, torch.tensor([0.7, 1.0]), torch.tensor([0.05, 0.3]))
+    path = export_gqcnn(net, tmp_path / "net", {"data": "test"})
+    description = json.loads(path.read_text())
+    assert description["format"] == "mvgrasp-gqcnn/1"
+    assert description["normalisation"]["pose_mean"] == pytest.approx([0.7, 1.0])
+    tensors = load_file(str(tmp_path / description["weights"]))
+    assert set(tensors) == set(net.state_dict()) == set(description["tensors"])
+    for name, value in net.state_dict().items():
+        assert torch.equal(tensors[name], value)

@@ -48,6 +48,24 @@ pub enum InferError {
         /// The tensor's rank.
         rank: usize,
     },
+    /// A model's files cannot be used.
+    #[error("{path}: {detail}")]
+    Model {
+        /// What is wrong.
+        detail: String,
+        /// The file.
+        path: std::path::PathBuf,
+    },
+    /// A weight tensor is missing or has the wrong shape.
+    #[error("{path}: tensor {name}: {detail}")]
+    Weight {
+        /// The tensor's name.
+        name: String,
+        /// What is wrong ("missing", "shape [3, 4], expected [4, 3]", ...).
+        detail: String,
+        /// The weights file.
+        path: std::path::PathBuf,
+    },
 }
 
 /// `Result` with [`InferError`].

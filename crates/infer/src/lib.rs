@@ -2,6 +2,7 @@
 
 pub mod error;
 mod gemm;
+pub mod model;
 pub mod ops;
 pub mod parallel;
 pub mod tensor;
@@ -9,5 +10,6 @@ pub mod tensor;
 mod testing;
 
 pub use error::{InferError, Result};
+pub use model::{Gqcnn, GqcnnWorkspace};
 pub use parallel::Parallelism;
 pub use tensor::Tensor;

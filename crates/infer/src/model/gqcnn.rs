@@ -1,0 +1,323 @@
+//! The GQ-CNN (Dex-Net 2.0) and the multi-view GQ-CNN: loaded from the training code's export,
+//! run on the op set with buffers reused across calls.
+
+use std::path::Path;
+
+use crate::error::{InferError, Result};
+use crate::model::description::{Architecture, ConvSpec, GQCNN_FORMAT, GqcnnDescription};
+use crate::model::weights::Weights;
+use crate::ops::{
+    Conv2dParams, LocalResponseNorm, Pool2dParams, concat_into, conv2d_into, linear_into,
+    local_response_norm_into, max_pool2d_into, relu, softmax,
+};
+use crate::parallel::Parallelism;
+use crate::tensor::Tensor;
+
+/// A weight matrix and its bias.
+#[derive(Debug)]
+struct Dense {
+    weight: Tensor,
+    bias: Tensor,
+}
+
+/// A loaded GQ-CNN: `(depth crops [N, 1, S, S], pose [N, P]) -> P(robust) [N]`.
+#[derive(Debug)]
+pub struct Gqcnn {
+    description: GqcnnDescription,
+    convs: Vec<(ConvSpec, Dense)>,
+    image_fc: Dense,
+    pose_fc: Dense,
+    merge_fc: Dense,
+    out: Dense,
+    image_mean: f32,
+    image_std: f32,
+    pose_mean: Vec<f32>,
+    pose_std: Vec<f32>,
+    lrn: LocalResponseNorm,
+    parallelism: Parallelism,
+}
+
+/// The intermediate tensors of [`Gqcnn::logits`], kept between calls so that scoring allocates
+/// only when the batch grows.
+#[derive(Debug, Default)]
+pub struct GqcnnWorkspace {
+    a: Tensor,
+    b: Tensor,
+    scratch: Vec<f32>,
+    image: Tensor,
+    pose_in: Tensor,
+    pose: Tensor,
+    merged: Tensor,
+    hidden: Tensor,
+    logits: Tensor,
+}
+
+impl Gqcnn {
+    /// Loads `NAME.json` and the weights it names (beside it), checking every tensor's name and
+    /// shape against the architecture.
+    ///
+    /// # Errors
+    /// [`InferError::Model`] naming the JSON for an unreadable or malformed description, another
+    /// format, or an architecture that cannot be built; [`InferError::Model`] or
+    /// [`InferError::Weight`] naming the weights file and tensor for missing, misshapen, extra
+    /// or non-f32 tensors and truncated files.
+    pub fn load(json: &Path) -> Result<Self> {
+        let model_error = |detail: String| InferError::Model {
+            detail,
+            path: json.to_path_buf(),
+        };
+        let text = std::fs::read_to_string(json).map_err(|e| model_error(e.to_string()))?;
+        let description: GqcnnDescription = serde_json::from_str(&text)
+            .map_err(|e| model_error(format!("not a GQ-CNN description: {e}")))?;
+        if description.format != GQCNN_FORMAT {
+            return Err(model_error(format!(
+                "format {:?}, expected {GQCNN_FORMAT:?}",
+                description.format
+            )));
+        }
+        let arch = &description.architecture;
+        check_architecture(arch).map_err(model_error)?;
+        let weights_path = json
+            .parent()
+            .unwrap_or(Path::new("."))
+            .join(&description.weights);
+        let mut weights = Weights::load(&weights_path)?;
+        let mut convs = Vec::with_capacity(arch.convs.len());
+        let (mut channels, mut size) = (1, arch.image_size_px);
+        for (i, spec) in arch.convs.iter().enumerate() {
+            let k = spec.kernel;
+            let layer = Dense {
+                weight: weights.take(
+                    &format!("convs.{i}.weight"),
+                    &[spec.filters, channels, k, k],
+                )?,
+                bias: weights.take(&format!("convs.{i}.bias"), &[spec.filters])?,
+            };
+            convs.push((*spec, layer));
+            channels = spec.filters;
+            size /= spec.pool;
+        }
+        let image_fc = take_dense(
+            &mut weights,
+            "image_fc",
+            arch.image_fc,
+            channels * size * size,
+        )?;
+        let pose_fc = take_dense(&mut weights, "pose_fc", arch.pose_fc, arch.pose_inputs)?;
+        let merge_fc = take_dense(
+            &mut weights,
+            "merge_fc",
+            arch.merge_fc,
+            arch.image_fc + arch.pose_fc,
+        )?;
+        let out = take_dense(&mut weights, "out", 2, arch.merge_fc)?;
+        let p = arch.pose_inputs;
+        let image_mean = weights.take("image_mean", &[1])?.data()[0];
+        let image_std = weights.take("image_std", &[1])?.data()[0];
+        let pose_mean = weights.take("pose_mean", &[p])?.into_data();
+        let pose_std = weights.take("pose_std", &[p])?.into_data();
+        if let Some(extra) = weights.remaining().first() {
+            return Err(InferError::Weight {
+                name: (*extra).to_string(),
+                detail: "not part of the architecture".into(),
+                path: weights.path().to_path_buf(),
+            });
+        }
+        let lrn = LocalResponseNorm {
+            size: arch.lrn_size,
+            alpha: arch.lrn_alpha,
+            beta: arch.lrn_beta,
+            k: arch.lrn_k,
+        };
+        Ok(Self {
+            convs,
+            image_fc,
+            pose_fc,
+            merge_fc,
+            out,
+            image_mean,
+            image_std,
+            pose_mean,
+            pose_std,
+            lrn,
+            parallelism: Parallelism::default(),
+            description,
+        })
+    }
+
+    /// Runs matrix products on `parallelism` (default: one thread).
+    pub fn with_parallelism(mut self, parallelism: Parallelism) -> Self {
+        self.parallelism = parallelism;
+        self
+    }
+
+    /// The description it was loaded from.
+    pub fn description(&self) -> &GqcnnDescription {
+        &self.description
+    }
+
+    /// The layers.
+    pub fn architecture(&self) -> &Architecture {
+        &self.description.architecture
+    }
+
+    /// The two logits (not robust, robust) per grasp, in `workspace`'s output buffer.
+    ///
+    /// # Errors
+    /// [`InferError::ShapeMismatch`] when `depth` is not `[N, 1, S, S]` with the network's `S`
+    /// or `pose` not `[N, P]` with its `P`.
+    pub fn logits<'w>(
+        &self,
+        depth: &Tensor,
+        pose: &Tensor,
+        workspace: &'w mut GqcnnWorkspace,
+    ) -> Result<&'w Tensor> {
+        let arch = self.architecture();
+        let s = arch.image_size_px;
+        let n = depth.shape().first().copied().unwrap_or(0);
+        if depth.shape() != [n, 1, s, s] {
+            return Err(InferError::ShapeMismatch {
+                op: "gqcnn depth",
+                expected: format!("[batch, 1, {s}, {s}]"),
+                got: depth.shape().to_vec(),
+            });
+        }
+        if pose.shape() != [n, arch.pose_inputs] {
+            return Err(InferError::ShapeMismatch {
+                op: "gqcnn pose",
+                expected: format!("[{n}, {}]", arch.pose_inputs),
+                got: pose.shape().to_vec(),
+            });
+        }
+        let par = self.parallelism;
+        let w = workspace;
+        w.a.resize(depth.shape());
+        for (x, &d) in w.a.data_mut().iter_mut().zip(depth.data()) {
+            *x = (d - self.image_mean) / self.image_std;
+        }
+        for (spec, layer) in &self.convs {
+            let pad = spec.kernel / 2;
+            let params = Conv2dParams {
+                padding: [pad, pad],
+                ..Conv2dParams::default()
+            };
+            conv2d_into(
+                &w.a,
+                &layer.weight,
+                Some(&layer.bias),
+                params,
+                &mut w.b,
+                &mut w.scratch,
+                par,
+            )?;
+            relu(&mut w.b);
+            std::mem::swap(&mut w.a, &mut w.b);
+            if spec.lrn {
+                local_response_norm_into(&w.a, self.lrn, &mut w.b)?;
+                std::mem::swap(&mut w.a, &mut w.b);
+            }
+            if spec.pool > 1 {
+                let p = spec.pool;
+                max_pool2d_into(
+                    &w.a,
+                    Pool2dParams::new([p, p]).with_stride([p, p]),
+                    &mut w.b,
+                )?;
+                std::mem::swap(&mut w.a, &mut w.b);
+            }
+        }
+        let features = w.a.len() / n.max(1);
+        w.a.reshape(&[n, features])?;
+        linear_into(
+            &w.a,
+            &self.image_fc.weight,
+            Some(&self.image_fc.bias),
+            &mut w.image,
+            par,
+        )?;
+        relu(&mut w.image);
+        w.pose_in.resize(pose.shape());
+        let p = arch.pose_inputs;
+        for (i, (x, &v)) in w.pose_in.data_mut().iter_mut().zip(pose.data()).enumerate() {
+            *x = (v - self.pose_mean[i % p]) / self.pose_std[i % p];
+        }
+        linear_into(
+            &w.pose_in,
+            &self.pose_fc.weight,
+            Some(&self.pose_fc.bias),
+            &mut w.pose,
+            par,
+        )?;
+        relu(&mut w.pose);
+        concat_into(&[&w.image, &w.pose], 1, &mut w.merged)?;
+        linear_into(
+            &w.merged,
+            &self.merge_fc.weight,
+            Some(&self.merge_fc.bias),
+            &mut w.hidden,
+            par,
+        )?;
+        relu(&mut w.hidden);
+        linear_into(
+            &w.hidden,
+            &self.out.weight,
+            Some(&self.out.bias),
+            &mut w.logits,
+            par,
+        )?;
+        Ok(&w.logits)
+    }
+
+    /// The probability that each grasp is robust (softmax of the logits, second class).
+    ///
+    /// # Errors
+    /// As [`Gqcnn::logits`].
+    pub fn predict(
+        &self,
+        depth: &Tensor,
+        pose: &Tensor,
+        workspace: &mut GqcnnWorkspace,
+    ) -> Result<Vec<f32>> {
+        self.logits(depth, pose, workspace)?;
+        softmax(&mut workspace.logits)?;
+        Ok(workspace
+            .logits
+            .data()
+            .chunks_exact(2)
+            .map(|p| p[1])
+            .collect())
+    }
+}
+
+/// `NAME.weight` `[outputs, inputs]` and `NAME.bias` `[outputs]`.
+fn take_dense(weights: &mut Weights, name: &str, outputs: usize, inputs: usize) -> Result<Dense> {
+    Ok(Dense {
+        weight: weights.take(&format!("{name}.weight"), &[outputs, inputs])?,
+        bias: weights.take(&format!("{name}.bias"), &[outputs])?,
+    })
+}
+
+/// What the loader cannot build, in words.
+fn check_architecture(arch: &Architecture) -> std::result::Result<(), String> {
+    if arch.image_size_px == 0 || arch.convs.is_empty() {
+        return Err("architecture: image_size_px and convs must not be empty".into());
+    }
+    for (i, c) in arch.convs.iter().enumerate() {
+        if c.filters == 0 || c.kernel % 2 == 0 || c.pool == 0 {
+            return Err(format!(
+                "architecture: convs[{i}] needs filters >= 1, an odd kernel and pool >= 1"
+            ));
+        }
+    }
+    let shrink: usize = arch.convs.iter().map(|c| c.pool).product();
+    if arch.image_size_px / shrink == 0 {
+        return Err("architecture: the pools shrink the image to nothing".into());
+    }
+    if arch.pose_inputs == 0 || arch.image_fc == 0 || arch.pose_fc == 0 || arch.merge_fc == 0 {
+        return Err("architecture: every layer width must be at least 1".into());
+    }
+    if arch.lrn_size == 0 {
+        return Err("architecture: lrn_size must be at least 1".into());
+    }
+    Ok(())
+}

@@ -1,0 +1,9 @@
+//! Networks built from the op set: their descriptions, weights and forward passes.
+
+pub mod description;
+pub mod gqcnn;
+pub mod weights;
+
+pub use description::{Architecture, ConvSpec, GQCNN_FORMAT, GqcnnDescription, Normalisation};
+pub use gqcnn::{Gqcnn, GqcnnWorkspace};
+pub use weights::Weights;

@@ -1,0 +1,93 @@
+//! Named tensors from a safetensors file, checked against the shapes a model expects.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use safetensors::{Dtype, SafeTensors};
+
+use crate::error::{InferError, Result};
+use crate::tensor::Tensor;
+
+/// The tensors of one safetensors file, as f32.
+#[derive(Debug)]
+pub struct Weights {
+    tensors: HashMap<String, Tensor>,
+    path: PathBuf,
+}
+
+impl Weights {
+    /// Reads every tensor of the file (F32, or F64/F16... refused by name).
+    ///
+    /// # Errors
+    /// [`InferError::Model`] naming the file when it cannot be read or is not safetensors
+    /// (truncated, corrupt header); [`InferError::Weight`] for a tensor that is not float32.
+    pub fn load(path: &Path) -> Result<Self> {
+        let model_error = |detail: String| InferError::Model {
+            detail,
+            path: path.to_path_buf(),
+        };
+        let bytes = std::fs::read(path).map_err(|e| model_error(format!("cannot read: {e}")))?;
+        let file = SafeTensors::deserialize(&bytes)
+            .map_err(|e| model_error(format!("not a safetensors file: {e}")))?;
+        let mut tensors = HashMap::new();
+        for (name, view) in file.tensors() {
+            if view.dtype() != Dtype::F32 {
+                return Err(InferError::Weight {
+                    name,
+                    detail: format!("dtype {:?}, expected F32", view.dtype()),
+                    path: path.to_path_buf(),
+                });
+            }
+            let data: Vec<f32> = view
+                .data()
+                .chunks_exact(4)
+                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                .collect();
+            let tensor = Tensor::new(view.shape(), data).map_err(|e| InferError::Weight {
+                name: name.clone(),
+                detail: e.to_string(),
+                path: path.to_path_buf(),
+            })?;
+            tensors.insert(name, tensor);
+        }
+        Ok(Self {
+            tensors,
+            path: path.to_path_buf(),
+        })
+    }
+
+    /// The file they came from.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Takes the tensor `name`, which must have `shape`.
+    ///
+    /// # Errors
+    /// [`InferError::Weight`] naming the tensor when it is missing or its shape differs.
+    pub fn take(&mut self, name: &str, shape: &[usize]) -> Result<Tensor> {
+        let weight_error = |detail: String| InferError::Weight {
+            name: name.to_string(),
+            detail,
+            path: self.path.clone(),
+        };
+        let tensor = self
+            .tensors
+            .remove(name)
+            .ok_or_else(|| weight_error("missing".into()))?;
+        if tensor.shape() != shape {
+            return Err(weight_error(format!(
+                "shape {:?}, expected {shape:?}",
+                tensor.shape()
+            )));
+        }
+        Ok(tensor)
+    }
+
+    /// Names of tensors not taken yet, sorted (a model checks there are none left over).
+    pub fn remaining(&self) -> Vec<&str> {
+        let mut names: Vec<&str> = self.tensors.keys().map(String::as_str).collect();
+        names.sort_unstable();
+        names
+    }
+}

@@ -1,0 +1,118 @@
+//! The GQ-CNN against torch: fixtures written by `training/scripts/make_parity_fixtures.py`
+//! (tiny networks of the same layer kinds as the shipped ones, random weights), and loading
+//! errors that name the file and the tensor.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // tests may fail loudly
+
+use std::path::{Path, PathBuf};
+
+use mvgrasp_infer::{Gqcnn, GqcnnWorkspace, InferError, Parallelism, Tensor};
+use safetensors::SafeTensors;
+
+fn fixtures() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures")
+}
+
+fn io(name: &str) -> (Tensor, Tensor, Vec<f32>) {
+    let bytes = std::fs::read(fixtures().join(format!("{name}.io.safetensors"))).unwrap();
+    let file = SafeTensors::deserialize(&bytes).unwrap();
+    let tensor = |n: &str| {
+        let view = file.tensor(n).unwrap();
+        let data = view
+            .data()
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect();
+        Tensor::new(view.shape(), data).unwrap()
+    };
+    (
+        tensor("depth"),
+        tensor("pose"),
+        tensor("logits").into_data(),
+    )
+}
+
+#[test]
+fn both_networks_match_torch_within_1e_4() {
+    for name in ["gqcnn_tiny_pose1", "gqcnn_tiny_pose2"] {
+        let (depth, pose, expected) = io(name);
+        for par in [Parallelism::Sequential, Parallelism::Rayon { threads: 2 }] {
+            let net = Gqcnn::load(&fixtures().join(format!("{name}.json")))
+                .unwrap()
+                .with_parallelism(par);
+            let mut workspace = GqcnnWorkspace::default();
+            // Twice: the second call reuses the buffers of the first.
+            for _ in 0..2 {
+                let logits = net.logits(&depth, &pose, &mut workspace).unwrap();
+                assert_eq!(logits.shape(), [7, 2]);
+                for (got, want) in logits.data().iter().zip(&expected) {
+                    assert!((got - want).abs() < 1e-4, "{name}: {got} vs torch {want}");
+                }
+            }
+            let p = net.predict(&depth, &pose, &mut workspace).unwrap();
+            assert!(p.iter().all(|p| (0.0..=1.0).contains(p)));
+        }
+    }
+}
+
+#[test]
+fn wrong_inputs_are_shape_errors() {
+    let net = Gqcnn::load(&fixtures().join("gqcnn_tiny_pose2.json")).unwrap();
+    let mut workspace = GqcnnWorkspace::default();
+    let depth = Tensor::zeros(&[3, 1, 32, 32]);
+    let pose = Tensor::zeros(&[3, 2]);
+    let err = net.logits(&depth, &pose, &mut workspace).unwrap_err();
+    assert!(matches!(err, InferError::ShapeMismatch { .. }), "{err}");
+    let depth = Tensor::zeros(&[3, 1, 16, 16]);
+    let err = net
+        .logits(&depth, &Tensor::zeros(&[3, 1]), &mut workspace)
+        .unwrap_err();
+    assert!(err.to_string().contains("pose"), "{err}");
+}
+
+fn copy_fixture(dir: &Path, name: &str) -> PathBuf {
+    for ext in ["json", "safetensors"] {
+        std::fs::copy(
+            fixtures().join(format!("{name}.{ext}")),
+            dir.join(format!("{name}.{ext}")),
+        )
+        .unwrap();
+    }
+    dir.join(format!("{name}.json"))
+}
+
+#[test]
+fn bad_model_files_name_the_file_and_the_tensor() {
+    let dir = tempfile::tempdir().unwrap();
+    let name = "gqcnn_tiny_pose1";
+    let json = copy_fixture(dir.path(), name);
+    let weights = dir.path().join(format!("{name}.safetensors"));
+
+    // A truncated weights file.
+    let bytes = std::fs::read(&weights).unwrap();
+    std::fs::write(&weights, &bytes[..bytes.len() / 2]).unwrap();
+    let err = Gqcnn::load(&json).unwrap_err().to_string();
+    assert!(err.contains("gqcnn_tiny_pose1.safetensors"), "{err}");
+
+    // An architecture that disagrees with the weights: the tensor is named.
+    std::fs::write(&weights, &bytes).unwrap();
+    let text = std::fs::read_to_string(&json).unwrap();
+    std::fs::write(&json, text.replace("\"image_fc\": 24", "\"image_fc\": 25")).unwrap();
+    let err = Gqcnn::load(&json).unwrap_err().to_string();
+    assert!(
+        err.contains("image_fc.weight") && err.contains("expected [25"),
+        "{err}"
+    );
+
+    // Another format, and garbage.
+    std::fs::write(&json, text.replace("mvgrasp-gqcnn/1", "something-else")).unwrap();
+    assert!(
+        Gqcnn::load(&json)
+            .unwrap_err()
+            .to_string()
+            .contains("format")
+    );
+    std::fs::write(&json, "{").unwrap();
+    let err = Gqcnn::load(&json).unwrap_err().to_string();
+    assert!(err.contains(&json.display().to_string()), "{err}");
+    assert!(Gqcnn::load(&dir.path().join("missing.json")).is_err());
+}
