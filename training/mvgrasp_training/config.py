@@ -33,6 +33,7 @@ __all__ = [
     "ConfigError",
     "DataConfig",
     "ExperimentConfig",
+    "ModelConfig",
     "TrainConfig",
     "load_config",
     "parse_config",
@@ -109,6 +110,31 @@ class TrainConfig(_Validated):
     """The optimiser's initial step size."""
     weight_decay: float = _checked(_NON_NEGATIVE, default=0.0)
     """L2 penalty on the weights."""
+    flip_augment: bool = True
+    """Dex-Net's augmentations: random horizontal and vertical flips (together: the 180-degree
+    rotation); a parallel-jaw grasp's crop means the same grasp flipped."""
+    noise_sigma_m: float = _checked(_NON_NEGATIVE, default=0.0)
+    """Standard deviation of Gaussian noise added to the depth crops while training, metres."""
+    balance_classes: bool = True
+    """Weigh the loss so that positives and negatives count equally."""
+    threads: int = _checked(_NON_NEGATIVE, default=0)
+    """torch intra-op threads (0: torch's default)."""
+
+
+_ARCHITECTURE_NAMES = ("dexnet2", "small")
+
+
+@dataclass(frozen=True)
+class ModelConfig(_Validated):
+    """Which network."""
+
+    architecture: str = _checked(
+        (lambda v: v in _ARCHITECTURE_NAMES, f"one of {', '.join(_ARCHITECTURE_NAMES)}"),
+        default="small",
+    )
+    """``dexnet2`` (Dex-Net 2.0's GQ-CNN) or ``small``."""
+    pose_inputs: int = _checked((lambda v: v in (1, 2), "1 or 2"), default=1)
+    """1: the grasp depth (GQ-CNN); 2: the grasp depth and theta (multi-view GQ-CNN)."""
 
 
 @dataclass(frozen=True)
@@ -121,6 +147,7 @@ class ExperimentConfig(_Validated):
     """Seeds every random choice (split, shuffling, initialisation, augmentation)."""
     data: DataConfig
     train: TrainConfig
+    model: ModelConfig = field(default_factory=ModelConfig)
 
 
 def load_config(path: str | Path, cls: type[T] = ExperimentConfig) -> T:  # type: ignore[assignment]
