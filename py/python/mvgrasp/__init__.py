@@ -4,7 +4,8 @@ Units are metres, radians, seconds and kilograms everywhere. Every error mvgrasp
 subclass of :class:`MvGraspError`, whose message is one line naming the file and the fault.
 
 The work happens in Rust (the private module ``mvgrasp._native``); this package only re-exports
-it with types (see ``_native.pyi``).
+it with types (see ``_native.pyi``). Grasp datasets have a friendlier face in
+:mod:`mvgrasp.grasp_dataset` (and :mod:`mvgrasp.ray_launcher` for clusters).
 """
 
 from mvgrasp._native import (
@@ -13,7 +14,10 @@ from mvgrasp._native import (
     MvGraspError,
     WeightsError,
     __version__,
+    generate_grasp_shard,
+    grasp_dataset_num_shards,
     load_mesh,
+    write_grasp_manifest,
 )
 
 __all__ = [
@@ -22,5 +26,8 @@ __all__ = [
     "MvGraspError",
     "WeightsError",
     "__version__",
+    "generate_grasp_shard",
+    "grasp_dataset_num_shards",
     "load_mesh",
+    "write_grasp_manifest",
 ]
