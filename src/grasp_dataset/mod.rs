@@ -13,7 +13,8 @@
 //! Output folder:
 //! ```text
 //! dataset.json                manifest: format, config, crop size, objects (id, name, source),
-//!                             finished shards with their counts, and the totals
+//!                             finished shards with their counts, and the totals (written
+//!                             at the start and at the end of a run)
 //! shard_NNNNN.safetensors     datapoints of objects [N*k, N*k + k) (k = objects_per_shard)
 //! shard_NNNNN.json            that shard's counts (written before the shard)
 //! ```
@@ -35,12 +36,11 @@ pub use config::{
     CameraDistribution, CropParams, GraspDatasetConfig, MultiViewCameras, NoiseParams,
     TopDownCameras,
 };
-pub use shard::{Datapoint, ShardRecord};
+pub use shard::{Counts, Datapoint, ShardRecord};
 
 use std::path::Path;
 
 use indicatif::{ProgressBar, ProgressStyle};
-use mvgrasp_grasp::physics::FailureStage;
 use mvgrasp_render::Renderer;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -82,38 +82,7 @@ pub struct Manifest {
     /// Finished shards, by index.
     pub shards: Vec<ShardRecord>,
     /// Sums over the finished shards.
-    pub totals: Totals,
-}
-
-/// Counts summed over shards.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Totals {
-    /// Datapoints.
-    pub datapoints: usize,
-    /// Robust-label positives.
-    pub positives: usize,
-    /// Collision-free datapoints.
-    pub collision_free: usize,
-    /// Rapier trials run.
-    pub physics_trials: usize,
-    /// Trials that held the object.
-    pub physics_held: usize,
-    /// Trials that got as far as the grasp (the object did not topple while settling).
-    pub physics_tested: usize,
-    /// Of those, trials whose outcome matched the robust label.
-    pub physics_agree: usize,
-}
-
-impl Totals {
-    fn add(&mut self, r: &ShardRecord) {
-        self.datapoints += r.datapoints;
-        self.positives += r.positives;
-        self.collision_free += r.collision_free;
-        self.physics_trials += r.physics_trials;
-        self.physics_held += r.physics_held;
-        self.physics_tested += r.physics_tested;
-        self.physics_agree += r.physics_agree;
-    }
+    pub totals: Counts,
 }
 
 /// What a run did.
@@ -124,7 +93,7 @@ pub struct GenerateSummary {
     /// Shards an earlier run had finished.
     pub skipped: usize,
     /// The manifest's totals after the run.
-    pub totals: Totals,
+    pub totals: Counts,
 }
 
 /// A dataset's objects, in id order, and the resolved config.
@@ -178,9 +147,9 @@ impl DatasetPlan {
     }
 
     fn manifest(&self, shards: Vec<ShardRecord>) -> Manifest {
-        let mut totals = Totals::default();
+        let mut totals = Counts::default();
         for s in &shards {
-            totals.add(s);
+            totals += s.counts;
         }
         Manifest {
             format: FORMAT.into(),
@@ -202,6 +171,11 @@ impl DatasetPlan {
         let shards = (0..self.num_shards())
             .filter_map(|i| finished_shard(out, i))
             .collect();
+        self.write_manifest_of(out, shards)
+    }
+
+    /// Writes the manifest of `shards` (finished, in index order); returns it.
+    fn write_manifest_of(&self, out: &Path, shards: Vec<ShardRecord>) -> Result<Manifest> {
         let manifest = self.manifest(shards);
         let text = serde_json::to_string_pretty(&manifest).map_err(|e| Error::Dataset {
             detail: format!("{}: {e}", out.display()),
@@ -259,6 +233,16 @@ pub fn generate_shard(
         return Ok(record);
     }
     std::fs::create_dir_all(out).map_err(Error::io("create", out))?;
+    make_shard(renderer, plan, out, index)
+}
+
+/// Makes shard `index` in `out` (which exists), finished or not.
+fn make_shard(
+    renderer: &Renderer,
+    plan: &DatasetPlan,
+    out: &Path,
+    index: usize,
+) -> Result<ShardRecord> {
     let k = plan.config.objects_per_shard;
     let objects = &plan.objects[index * k..((index + 1) * k).min(plan.objects.len())];
     let results: Vec<(u32, Result<Vec<Datapoint>>)> = objects
@@ -293,28 +277,14 @@ pub fn generate_shard(
             Err(e) => record.empty_objects.push((id, e.to_string())),
         }
     }
-    record.datapoints = points.len();
-    record.positives = points.iter().filter(|p| p.robust_label).count();
-    record.collision_free = points.iter().filter(|p| p.collision_free).count();
-    let trials = points.iter().filter(|p| p.physics >= 0);
-    record.physics_trials = trials.clone().count();
-    record.physics_held = trials.clone().filter(|p| p.physics == 1).count();
-    for p in trials.clone() {
-        if let Some(stage) = FailureStage::ALL.get(p.physics_stage as usize) {
-            record.physics_failures.count(*stage);
-        }
-    }
-    // A trial whose object toppled before the gripper came tested the pose, not the grasp.
-    let tested = trials.filter(|p| p.physics_stage != FailureStage::Settle as i8);
-    record.physics_tested = tested.clone().count();
-    record.physics_agree = tested
-        .filter(|p| (p.physics == 1) == p.robust_label)
-        .count();
+    record.counts = Counts::of(&points);
     write_shard(out, &points, plan.config.crop.size_px as usize, &record)?;
     Ok(record)
 }
 
-/// Makes every unfinished shard of `sources` in `out` and writes the manifest after each.
+/// Makes every unfinished shard of `sources` in `out`, and the manifest at the start (the
+/// shards an earlier run finished) and at the end. A shard is finished when its file is there;
+/// an interrupted run's manifest is rewritten by the next.
 ///
 /// # Errors
 /// [`Error::Config`] when `out` holds a dataset of another config; the errors of
@@ -341,23 +311,26 @@ pub fn generate(
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let mut summary = GenerateSummary::default();
+    let mut shards = Vec::with_capacity(plan.num_shards());
     let mut datapoints = 0;
     for index in 0..plan.num_shards() {
-        let record = if let Some(record) = finished_shard(out, index) {
-            summary.skipped += 1;
-            record
-        } else {
-            let record = generate_shard(renderer, &plan, out, index)?;
-            plan.write_manifest(out)?;
-            summary.written += 1;
-            record
+        let record = match finished_shard(out, index) {
+            Some(record) => {
+                summary.skipped += 1;
+                record
+            }
+            None => {
+                summary.written += 1;
+                make_shard(renderer, &plan, out, index)?
+            }
         };
-        datapoints += record.datapoints;
+        datapoints += record.counts.datapoints;
         bar.inc(record.objects.len() as u64);
         bar.set_message(format!("{datapoints} datapoints"));
+        shards.push(record);
     }
     bar.finish_and_clear();
-    summary.totals = plan.write_manifest(out)?.totals;
+    summary.totals = plan.write_manifest_of(out, shards)?.totals;
     Ok(summary)
 }
 

@@ -25,6 +25,7 @@
 
 use std::path::{Path, PathBuf};
 
+use mvgrasp_grasp::physics::{FailureStage, StageCounts};
 use safetensors::Dtype;
 use safetensors::tensor::TensorView;
 use serde::{Deserialize, Serialize};
@@ -85,24 +86,75 @@ pub struct ShardRecord {
     pub file: String,
     /// Ids of the objects it holds (a contiguous range).
     pub objects: Vec<u32>,
+    /// Its counts (flattened into the JSON).
+    #[serde(flatten)]
+    pub counts: Counts,
+    /// Objects that gave no datapoint, with the reason.
+    pub empty_objects: Vec<(u32, String)>,
+}
+
+/// What a set of datapoints holds; summed over shards for a dataset's totals.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Counts {
     /// Datapoints.
     pub datapoints: usize,
     /// Robust-label positives.
     pub positives: usize,
     /// Collision-free datapoints.
     pub collision_free: usize,
-    /// Physics trials run, and how many held.
+    /// Rapier trials run.
     pub physics_trials: usize,
-    /// See `physics_trials`.
+    /// Trials that held the object.
     pub physics_held: usize,
     /// Trials that got as far as the grasp (the object did not topple while settling).
     pub physics_tested: usize,
     /// Of those, trials whose outcome matched the robust label.
     pub physics_agree: usize,
     /// Failed trials by stage.
-    pub physics_failures: mvgrasp_grasp::physics::StageCounts,
-    /// Objects that gave no datapoint, with the reason.
-    pub empty_objects: Vec<(u32, String)>,
+    pub physics_failures: StageCounts,
+}
+
+impl Counts {
+    /// The counts of `points`.
+    pub fn of(points: &[Datapoint]) -> Self {
+        let mut counts = Self {
+            datapoints: points.len(),
+            ..Self::default()
+        };
+        for p in points {
+            counts.positives += usize::from(p.robust_label);
+            counts.collision_free += usize::from(p.collision_free);
+            if p.physics < 0 {
+                continue;
+            }
+            counts.physics_trials += 1;
+            counts.physics_held += usize::from(p.physics == 1);
+            let stage = FailureStage::ALL.get(p.physics_stage as usize).copied();
+            if let Some(stage) = stage {
+                counts.physics_failures.count(stage);
+            }
+            // A trial whose object toppled before the gripper came tested the pose, not the
+            // grasp.
+            if stage != Some(FailureStage::Settle) {
+                counts.physics_tested += 1;
+                counts.physics_agree += usize::from((p.physics == 1) == p.robust_label);
+            }
+        }
+        counts
+    }
+}
+
+impl std::ops::AddAssign for Counts {
+    fn add_assign(&mut self, other: Self) {
+        self.datapoints += other.datapoints;
+        self.positives += other.positives;
+        self.collision_free += other.collision_free;
+        self.physics_trials += other.physics_trials;
+        self.physics_held += other.physics_held;
+        self.physics_tested += other.physics_tested;
+        self.physics_agree += other.physics_agree;
+        self.physics_failures += other.physics_failures;
+    }
 }
 
 /// The shard's file name.
