@@ -11,6 +11,49 @@
 
 use super::config::CropParams;
 
+/// The similarity between crop and image coordinates of one grasp (see the module docs).
+#[derive(Clone, Copy, Debug)]
+struct CropFrame {
+    center: [f32; 2],
+    cos: f32,
+    sin: f32,
+    /// Image pixels per crop pixel.
+    scale: f32,
+    /// Crop coordinate of the grasp centre.
+    half: f32,
+}
+
+impl CropFrame {
+    fn new(center_px: [f32; 2], angle_rad: f32, params: &CropParams) -> Self {
+        let (sin, cos) = angle_rad.sin_cos();
+        Self {
+            center: center_px,
+            cos,
+            sin,
+            scale: params.window_px as f32 / params.size_px as f32,
+            half: params.size_px as f32 / 2.0,
+        }
+    }
+
+    fn image_point(self, [x, y]: [f32; 2]) -> [f32; 2] {
+        let dx = (x - self.half) * self.scale;
+        let dy = (y - self.half) * self.scale;
+        [
+            self.center[0] + self.cos * dx - self.sin * dy,
+            self.center[1] + self.sin * dx + self.cos * dy,
+        ]
+    }
+
+    fn crop_point(self, [u, v]: [f32; 2]) -> [f32; 2] {
+        let du = u - self.center[0];
+        let dv = v - self.center[1];
+        [
+            (self.cos * du + self.sin * dv) / self.scale + self.half,
+            (-self.sin * du + self.cos * dv) / self.scale + self.half,
+        ]
+    }
+}
+
 /// The image point that crop coordinates `(x = column, y = row)` show (see the module docs).
 pub fn crop_to_image(
     center_px: [f32; 2],
@@ -18,15 +61,7 @@ pub fn crop_to_image(
     params: &CropParams,
     xy: [f32; 2],
 ) -> [f32; 2] {
-    let scale = params.window_px as f32 / params.size_px as f32;
-    let half = params.size_px as f32 / 2.0;
-    let (s, c) = angle_rad.sin_cos();
-    let dx = (xy[0] - half) * scale;
-    let dy = (xy[1] - half) * scale;
-    [
-        center_px[0] + c * dx - s * dy,
-        center_px[1] + s * dx + c * dy,
-    ]
+    CropFrame::new(center_px, angle_rad, params).image_point(xy)
 }
 
 /// The crop coordinates `(x = column, y = row)` of image point `uv` (the inverse of
@@ -37,15 +72,7 @@ pub fn image_to_crop(
     params: &CropParams,
     uv: [f32; 2],
 ) -> [f32; 2] {
-    let scale = params.window_px as f32 / params.size_px as f32;
-    let half = params.size_px as f32 / 2.0;
-    let (s, c) = angle_rad.sin_cos();
-    let du = uv[0] - center_px[0];
-    let dv = uv[1] - center_px[1];
-    [
-        (c * du + s * dv) / scale + half,
-        (-s * du + c * dv) / scale + half,
-    ]
+    CropFrame::new(center_px, angle_rad, params).crop_point(uv)
 }
 
 /// Cuts the crop of the grasp at `center_px`, `angle_rad` from a `width` x `height` depth
@@ -58,20 +85,23 @@ pub fn crop_depth(
     angle_rad: f32,
     params: &CropParams,
 ) -> Vec<f32> {
+    let frame = CropFrame::new(center_px, angle_rad, params);
     let size = params.size_px as usize;
     let per_side = (params.window_px as f32 / params.size_px as f32)
         .round()
         .max(1.0) as usize;
+    // Where a pixel's samples sit within it, crop pixels from its centre.
+    let offsets: Vec<f32> = (0..per_side)
+        .map(|k| (k as f32 + 0.5) / per_side as f32 - 0.5)
+        .collect();
     let mut out = Vec::with_capacity(size * size);
     for i in 0..size {
         for j in 0..size {
             let mut sum = 0.0f64;
             let mut count = 0u32;
-            for a in 0..per_side {
-                for b in 0..per_side {
-                    let sub = |k: usize| (k as f32 + 0.5) / per_side as f32 - 0.5;
-                    let xy = [j as f32 + sub(b), i as f32 + sub(a)];
-                    let uv = crop_to_image(center_px, angle_rad, params, xy);
+            for &dy in &offsets {
+                for &dx in &offsets {
+                    let uv = frame.image_point([j as f32 + dx, i as f32 + dy]);
                     let value = sample(depth_m, width, height, uv);
                     if value > 0.0 {
                         sum += f64::from(value);
