@@ -93,7 +93,7 @@ impl PlacedObject {
     }
 }
 
-/// Owned vertex data for the renderer: the object in its pose, and the table.
+/// Owned vertex data for the renderer: an object's mesh in its pose, and a table square.
 pub struct SceneData {
     positions: Vec<[f32; 3]>,
     world_from_object: [[f32; 4]; 4],
@@ -105,23 +105,24 @@ pub struct SceneData {
 const TABLE_TRIANGLES: [[u32; 3]; 2] = [[0, 1, 2], [0, 2, 3]];
 
 impl SceneData {
-    /// The object's vertices and pose, and a table square around it at z = 0.
+    /// The placed object's vertices and pose, and a table square around it at z = 0.
     pub fn new(object: &PlacedObject) -> Self {
-        let h = TABLE_HALF_SIDE_M;
+        Self::of_mesh(&object.mesh, &object.table_from_object, TABLE_HALF_SIDE_M)
+    }
+
+    /// `mesh` at `table_from_object` and a table square `2 * table_half_side_m` wide at z = 0.
+    pub fn of_mesh(mesh: &TriangleMesh, table_from_object: &Pose3, table_half_side_m: f32) -> Self {
+        let h = table_half_side_m;
         Self {
-            positions: object
-                .mesh
-                .vertices()
-                .iter()
-                .map(|v| v.to_array())
-                .collect(),
-            world_from_object: row_major(&object.table_from_object),
-            sides: sides_of(&object.mesh),
+            positions: mesh.vertices().iter().map(|v| v.to_array()).collect(),
+            world_from_object: row_major(table_from_object),
+            sides: sides_of(mesh),
             table_positions: [[-h, -h, 0.0], [h, -h, 0.0], [h, h, 0.0], [-h, h, 0.0]],
         }
     }
 
-    /// The meshes to upload: the object with `colors` (per its mode), and the table if asked.
+    /// The meshes to upload: the placed object with `colors` (per its mode), and the table if
+    /// asked.
     pub fn inputs<'a>(
         &'a self,
         object: &'a PlacedObject,
@@ -132,9 +133,20 @@ impl SceneData {
             ColorMode::PerVertex => Colors::PerVertex(colors),
             ColorMode::PerFace => Colors::PerFace(colors),
         };
+        self.mesh_inputs(object.mesh.triangles(), colors, table)
+    }
+
+    /// The meshes to upload: the object (`triangles` of the mesh this was made from) with
+    /// `colors`, and the table if asked.
+    pub fn mesh_inputs<'a>(
+        &'a self,
+        triangles: &'a [[u32; 3]],
+        colors: Colors<'a>,
+        table: bool,
+    ) -> Vec<MeshInput<'a>> {
         let mut inputs = vec![MeshInput {
             positions: &self.positions,
-            indices: object.mesh.triangles(),
+            indices: triangles,
             sides: self.sides,
             colors,
             world_from_mesh: self.world_from_object,

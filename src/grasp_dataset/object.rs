@@ -8,7 +8,7 @@ use mvgrasp_grasp::{
     AntipodalAxis, Grasp, GraspObject, Gripper, canonical_frame, check_collision,
     sample_antipodal_axes,
 };
-use mvgrasp_render::{Colors, IDENTITY, MeshInput, Renderer, Sides};
+use mvgrasp_render::{Colors, Renderer};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -18,8 +18,8 @@ use super::config::GraspDatasetConfig;
 use super::crop::crop_depth;
 use super::noise::add_depth_noise;
 use super::shard::Datapoint;
-use crate::convert::{render_view, row_major, sides_of};
-use crate::dataset::splitmix;
+use crate::convert::{render_view, row_major};
+use crate::dataset::{SceneData, splitmix};
 use crate::error::Result;
 
 /// Half the rendered table's side, metres: wide enough to fill low side views.
@@ -221,27 +221,8 @@ fn render_depths(
     table_from_object: &Pose3,
     cameras: &[mvgrasp_geometry::Camera],
 ) -> Result<Vec<Vec<f32>>> {
-    let positions: Vec<[f32; 3]> = mesh.vertices().iter().map(|v| v.to_array()).collect();
-    let h = TABLE_HALF_SIDE_M;
-    let table = [[-h, -h, 0.0], [h, -h, 0.0], [h, h, 0.0], [-h, h, 0.0]];
-    let inputs = [
-        MeshInput {
-            positions: &positions,
-            indices: mesh.triangles(),
-            sides: sides_of(mesh),
-            colors: Colors::Uniform([200, 200, 200]),
-            world_from_mesh: row_major(table_from_object),
-            instance_id: 1,
-        },
-        MeshInput {
-            positions: &table,
-            indices: &[[0, 1, 2], [0, 2, 3]],
-            sides: Sides::Both,
-            colors: Colors::Uniform([150, 150, 150]),
-            world_from_mesh: IDENTITY,
-            instance_id: 2,
-        },
-    ];
+    let data = SceneData::of_mesh(mesh, table_from_object, TABLE_HALF_SIDE_M);
+    let inputs = data.mesh_inputs(mesh.triangles(), Colors::Uniform([200, 200, 200]), true);
     let scene = renderer.upload(&inputs)?;
     let views: Vec<_> = cameras.iter().map(render_view).collect();
     Ok(renderer
