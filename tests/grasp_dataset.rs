@@ -2,6 +2,9 @@
 //! shard's own records, determinism across thread counts, and kill -9 then resume.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // tests may fail loudly
 
+mod common;
+
+use common::renderer;
 use std::path::Path;
 use std::process::Command;
 
@@ -13,21 +16,7 @@ use mvgrasp::grasp::quality::{find_contacts, robust_quality};
 use mvgrasp::grasp::{GraspObject, canonical_frame, check_collision};
 use mvgrasp::grasp_dataset::crop::image_to_crop;
 use mvgrasp::grasp_dataset::{CameraDistribution, GraspDatasetConfig, MultiViewCameras, generate};
-use mvgrasp::render::{Backend, INSTALL_HINT, Renderer};
 use safetensors::SafeTensors;
-
-fn renderer() -> Option<Renderer> {
-    if std::env::var("MVGRASP_SKIP_GPU_TESTS").is_ok_and(|v| v == "1") {
-        eprintln!("MVGRASP_SKIP_GPU_TESTS=1: skipping a GPU test");
-        return None;
-    }
-    match Renderer::new(Backend::Auto) {
-        Ok(r) => Some(r),
-        Err(e) => {
-            panic!("no graphics adapter ({e}); {INSTALL_HINT}; or set MVGRASP_SKIP_GPU_TESTS=1")
-        }
-    }
-}
 
 /// A small, quick config (debug builds run these).
 fn small_config() -> GraspDatasetConfig {

@@ -3,6 +3,9 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // tests may fail loudly
 
+mod common;
+
+use common::renderer;
 use std::path::{Path, PathBuf};
 
 use mvgrasp::convert::render_view;
@@ -11,20 +14,7 @@ use mvgrasp::dataset::{
 };
 use mvgrasp::geometry::objects::{Category, ObjectSpec};
 use mvgrasp::geometry::{HemisphereLayout, Intrinsics, RayCaster, TriangleMesh, Vec3, load_mesh};
-use mvgrasp::render::{Backend, INSTALL_HINT, Renderer};
-
-fn renderer() -> Option<Renderer> {
-    if std::env::var("MVGRASP_SKIP_GPU_TESTS").is_ok_and(|v| v == "1") {
-        eprintln!("MVGRASP_SKIP_GPU_TESTS=1: skipping a GPU test");
-        return None;
-    }
-    match Renderer::new(Backend::Auto) {
-        Ok(r) => Some(r),
-        Err(e) => {
-            panic!("no graphics adapter ({e}); {INSTALL_HINT}; or set MVGRASP_SKIP_GPU_TESTS=1")
-        }
-    }
-}
+use mvgrasp::render::Renderer;
 
 /// Fraction of object pixels (away from silhouette and occlusion edges) whose rendered depth is
 /// within 1 mm of the ray cast, over the paper's 10 test views.
