@@ -111,7 +111,7 @@ pub struct LibraryArgs {
 
 impl LibraryArgs {
     /// The objects, in a fixed order: the library by category then index, or the files as
-    /// given with each folder's meshes sorted by path.
+    /// given (made absolute) with each folder's meshes sorted by path.
     ///
     /// # Errors
     /// A message naming a path that does not exist or a folder with no mesh.
@@ -137,7 +137,11 @@ impl LibraryArgs {
                 .collect());
         }
         let mut sources = Vec::new();
-        for path in &self.mesh {
+        for given in &self.mesh {
+            // Absolute, so that a dataset records the same sources whatever the working folder
+            // (a Ray worker's is not the driver's).
+            let path =
+                &std::fs::canonicalize(given).map_err(|e| format!("{}: {e}", given.display()))?;
             if path.is_dir() {
                 let mut found = Vec::new();
                 collect_meshes(path, &mut found)?;
@@ -146,10 +150,8 @@ impl LibraryArgs {
                 }
                 found.sort();
                 sources.extend(found.into_iter().map(ObjectSource::File));
-            } else if path.is_file() {
-                sources.push(ObjectSource::File(path.clone()));
             } else {
-                return Err(format!("{}: no such file or folder", path.display()));
+                sources.push(ObjectSource::File(path.clone()));
             }
         }
         Ok(sources)
@@ -171,4 +173,46 @@ fn collect_meshes(dir: &std::path::Path, found: &mut Vec<PathBuf>) -> Result<(),
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dataset::ObjectSource;
+
+    fn library(mesh: Vec<PathBuf>) -> LibraryArgs {
+        LibraryArgs {
+            mesh,
+            per_category: 1,
+            categories: Vec::new(),
+            library_seed: 0,
+        }
+    }
+
+    #[test]
+    fn folders_expand_to_their_meshes_sorted_and_absolute() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir_all(dir.path().join("b")).unwrap();
+        for f in ["b/z.stl", "a.obj", "notes.txt"] {
+            std::fs::write(dir.path().join(f), "").unwrap();
+        }
+        let sources = library(vec![dir.path().to_path_buf()]).sources().unwrap();
+        let root = std::fs::canonicalize(dir.path()).unwrap();
+        assert_eq!(
+            sources,
+            [
+                ObjectSource::File(root.join("a.obj")),
+                ObjectSource::File(root.join("b/z.stl"))
+            ]
+        );
+        let err = library(vec![dir.path().join("nowhere.obj")])
+            .sources()
+            .unwrap_err();
+        assert!(err.contains("nowhere.obj"), "{err}");
+        std::fs::create_dir_all(dir.path().join("empty")).unwrap();
+        let err = library(vec![dir.path().join("empty")])
+            .sources()
+            .unwrap_err();
+        assert!(err.contains("no .obj"), "{err}");
+    }
 }

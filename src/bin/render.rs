@@ -3,7 +3,8 @@
 //! RGB, depth and mask PNGs and the cameras as JSON. Resumes where an earlier run stopped.
 //!
 //! ```text
-//! cargo run --release --bin render -- --out DIR [--per-category N] [--seed S] [--mesh PATH ...]
+//! cargo run --release --bin render -- --out DIR [--per-category N] [--seed S] [--library-seed S]
+//!     [--mesh FILE_OR_FOLDER ...]
 //! ```
 
 use std::path::PathBuf;
@@ -11,8 +12,8 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use clap::Parser;
-use mvgrasp::dataset::{DatasetConfig, ObjectSource, write_dataset};
-use mvgrasp::geometry::objects::{Category, ObjectSpec};
+use mvgrasp::cli::LibraryArgs;
+use mvgrasp::dataset::{DatasetConfig, write_dataset};
 use mvgrasp::geometry::{Intrinsics, IntrinsicsPreset};
 use mvgrasp::render::{Backend, Renderer};
 
@@ -23,16 +24,9 @@ struct Args {
     /// Output folder (created if missing; finished objects are skipped).
     #[arg(long)]
     out: PathBuf,
-    /// Mesh files (OBJ, STL, URDF; metres). Default: the built-in object library.
-    #[arg(long)]
-    mesh: Vec<PathBuf>,
-    /// Built-in objects per category (when no --mesh is given).
-    #[arg(long, default_value_t = 1)]
-    per_category: u32,
-    /// Built-in categories, comma-separated (default: all).
-    #[arg(long, value_delimiter = ',')]
-    categories: Vec<Category>,
-    /// Seed of the built-in objects, camera layouts and colours.
+    #[command(flatten)]
+    objects: LibraryArgs,
+    /// Seed of the camera layouts and colours.
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// Camera intrinsics preset: phoxi_s, primesense, realsense_d435.
@@ -61,27 +55,7 @@ fn run(args: &Args) -> Result<(), String> {
             args.backend
         )
     })?;
-    let sources: Vec<ObjectSource> = if args.mesh.is_empty() {
-        let categories = if args.categories.is_empty() {
-            Category::ALL.to_vec()
-        } else {
-            args.categories.clone()
-        };
-        categories
-            .into_iter()
-            .flat_map(|category| {
-                (0..args.per_category).map(move |index| {
-                    ObjectSource::Builtin(ObjectSpec {
-                        category,
-                        index,
-                        seed: args.seed,
-                    })
-                })
-            })
-            .collect()
-    } else {
-        args.mesh.iter().cloned().map(ObjectSource::File).collect()
-    };
+    let sources = args.objects.sources()?;
     let config = DatasetConfig {
         seed: args.seed,
         intrinsics: Intrinsics::preset(preset),

@@ -21,12 +21,14 @@ from mvgrasp import _native
 PathLike = Union[str, "os.PathLike[str]"]
 
 
-def _objects(
+def objects_arguments(
     meshes: Optional[Sequence[PathLike]],
     per_category: int,
     categories: Optional[Sequence[str]],
     library_seed: int,
 ) -> dict[str, Any]:
+    """The object-selection keyword arguments of the native functions (mesh paths as text;
+    the native side makes them absolute)."""
     return {
         "meshes": None if meshes is None else [os.fspath(m) for m in meshes],
         "per_category": per_category,
@@ -45,7 +47,7 @@ def num_shards(
     """How many shards the dataset has (``objects_per_shard`` objects each)."""
     return _native.grasp_dataset_num_shards(
         None if config is None else os.fspath(config),
-        **_objects(meshes, per_category, categories, library_seed),
+        **objects_arguments(meshes, per_category, categories, library_seed),
     )
 
 
@@ -66,7 +68,7 @@ def generate_shard(
         shard,
         None if config is None else os.fspath(config),
         backend=backend,
-        **_objects(meshes, per_category, categories, library_seed),
+        **objects_arguments(meshes, per_category, categories, library_seed),
     )
     return json.loads(text)
 
@@ -83,7 +85,7 @@ def write_manifest(
     text = _native.write_grasp_manifest(
         os.fspath(out),
         None if config is None else os.fspath(config),
-        **_objects(meshes, per_category, categories, library_seed),
+        **objects_arguments(meshes, per_category, categories, library_seed),
     )
     return json.loads(text)
 
@@ -97,7 +99,7 @@ def generate(
     library_seed: int = 0,
 ) -> dict[str, Any]:
     """Makes every shard on this machine, one after another; returns the manifest."""
-    objects = _objects(meshes, per_category, categories, library_seed)
+    objects = objects_arguments(meshes, per_category, categories, library_seed)
     for shard in range(num_shards(config, **objects)):
         generate_shard(out, shard, config, **objects)
     return write_manifest(out, config, **objects)

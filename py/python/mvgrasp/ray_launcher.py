@@ -46,12 +46,7 @@ def generate_with_ray(
 
     if not ray.is_initialized():
         ray.init(address=address, num_cpus=num_cpus if address is None else None)
-    objects: dict[str, Any] = {
-        "meshes": None if meshes is None else [os.path.abspath(m) for m in meshes],
-        "per_category": per_category,
-        "categories": categories,
-        "library_seed": library_seed,
-    }
+    objects = grasp_dataset.objects_arguments(meshes, per_category, categories, library_seed)
     out = os.path.abspath(out)
     config_path = None if config is None else os.path.abspath(config)
     threads = max(1, int(cpus_per_shard))
