@@ -103,6 +103,35 @@ fn bad_model_files_name_the_file_and_the_tensor() {
         "{err}"
     );
 
+    // A zero standard deviation would divide by zero: refused.
+    std::fs::write(&json, &text).unwrap();
+    let mut file = safetensors::SafeTensors::deserialize(&bytes)
+        .unwrap()
+        .tensors()
+        .into_iter()
+        .map(|(name, view)| {
+            (
+                name,
+                (view.dtype(), view.shape().to_vec(), view.data().to_vec()),
+            )
+        })
+        .collect::<std::collections::BTreeMap<_, _>>();
+    if let Some(std) = file.get_mut("image_std") {
+        std.2 = 0.0f32.to_le_bytes().to_vec();
+    }
+    let views: Vec<_> = file
+        .iter()
+        .map(|(n, (d, s, b))| {
+            (
+                n.clone(),
+                safetensors::tensor::TensorView::new(*d, s.clone(), b).unwrap(),
+            )
+        })
+        .collect();
+    std::fs::write(&weights, safetensors::serialize(views, None).unwrap()).unwrap();
+    let err = Gqcnn::load(&json).unwrap_err().to_string();
+    assert!(err.contains("standard deviation"), "{err}");
+
     // Another format, and garbage.
     std::fs::write(&json, text.replace("mvgrasp-gqcnn/1", "something-else")).unwrap();
     assert!(

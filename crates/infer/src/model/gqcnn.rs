@@ -116,6 +116,14 @@ impl Gqcnn {
         let image_std = weights.take("image_std", &[1])?.data()[0];
         let pose_mean = weights.take("pose_mean", &[p])?.into_data();
         let pose_std = weights.take("pose_std", &[p])?.into_data();
+        let usable = |v: &f32| v.is_finite() && *v > 0.0;
+        if !(usable(&image_std) && pose_std.iter().all(usable)) {
+            return Err(InferError::Weight {
+                name: "image_std / pose_std".into(),
+                detail: "a standard deviation is not a finite number > 0".into(),
+                path: weights.path().to_path_buf(),
+            });
+        }
         if let Some(extra) = weights.remaining().first() {
             return Err(InferError::Weight {
                 name: (*extra).to_string(),
