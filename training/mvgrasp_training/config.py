@@ -108,6 +108,8 @@ class TrainConfig(_Validated):
     """Samples per optimiser step."""
     learning_rate: float = _checked(_POSITIVE)
     """The optimiser's initial step size."""
+    learning_rate_decay: float = _checked((lambda v: 0 < v <= 1, "in (0, 1]"), default=1.0)
+    """The step size is multiplied by this after every epoch (Dex-Net 2.0: 0.95)."""
     weight_decay: float = _checked(_NON_NEGATIVE, default=0.0)
     """L2 penalty on the weights."""
     flip_augment: bool = True
@@ -118,7 +120,7 @@ class TrainConfig(_Validated):
     balance_classes: bool = True
     """Weigh the loss so that positives and negatives count equally."""
     threads: int = _checked(_NON_NEGATIVE, default=0)
-    """torch intra-op threads (0: torch's default)."""
+    """torch intra-op threads of each process (0: torch's default)."""
 
 
 _ARCHITECTURE_NAMES = ("dexnet2", "small")

@@ -11,6 +11,7 @@ from typing import Any
 import torch
 from safetensors.torch import save_file
 
+from mvgrasp_training._files import read_format_json
 from mvgrasp_training.gqcnn import GQCNN
 
 FORMAT = "mvgrasp-gqcnn/1"
@@ -39,3 +40,34 @@ def export_gqcnn(net: GQCNN, stem: str | Path, training: dict[str, Any] | None =
     path = stem.with_suffix(".json")
     path.write_text(json.dumps(description, indent=2) + "\n")
     return path
+
+
+def load_gqcnn(path: str | Path) -> tuple[GQCNN, dict[str, Any]]:
+    """Reads an export back into torch: the network (in eval mode) and its description.
+
+    Raises:
+        ValueError: the JSON is not an export of this format, or a tensor is missing or has
+            another shape; the message names the file.
+    """
+    from safetensors.torch import load_file
+
+    from mvgrasp_training.gqcnn import Architecture, ConvSpec
+
+    path = Path(path)
+    description = read_format_json(path, FORMAT, "network description")
+    arch = dict(description["architecture"])
+    arch["convs"] = tuple(ConvSpec(**c) for c in arch["convs"])
+    net = GQCNN(Architecture(**arch))
+    weights = path.parent / description["weights"]
+    tensors = load_file(str(weights))
+    expected = net.state_dict()
+    for name, value in expected.items():
+        if name not in tensors:
+            raise ValueError(f"{weights}: tensor {name} is missing")
+        if tensors[name].shape != value.shape:
+            raise ValueError(
+                f"{weights}: tensor {name} has shape {list(tensors[name].shape)}, "
+                f"expected {list(value.shape)}"
+            )
+    net.load_state_dict({name: tensors[name] for name in expected})
+    return net.eval(), description

@@ -18,6 +18,8 @@ from typing import Any
 
 import numpy as np
 
+from mvgrasp_training._files import read_format_json
+
 DTYPES = {
     "F32": np.dtype("<f4"),
     "F64": np.dtype("<f8"),
@@ -83,13 +85,7 @@ class GraspDataset:
     def open(cls, root: str | Path) -> GraspDataset:
         root = Path(root)
         path = root / "dataset.json"
-        try:
-            manifest = json.loads(path.read_text())
-        except (OSError, json.JSONDecodeError) as e:
-            raise ShardError(f"{path}: cannot read the manifest: {e}") from e
-        if manifest.get("format") != FORMAT:
-            raise ShardError(f"{path}: format {manifest.get('format')!r}, expected {FORMAT!r}")
-        return cls(root, manifest)
+        return cls(root, read_format_json(path, FORMAT, "manifest", ShardError))
 
     def shards(self) -> Iterator[dict[str, np.ndarray]]:
         """The finished shards, in index order."""

@@ -1,18 +1,27 @@
 """Training a GQ-CNN on an mvgrasp grasp dataset.
 
     python -m mvgrasp_training.train CONFIG.toml --out DIR [--test-dataset DIR]
+    torchrun --standalone --nproc_per_node 2 -m mvgrasp_training.train CONFIG.toml --out DIR
 
 Object-wise split (``data.val_fraction`` of the objects held out, chosen by the seed), Dex-Net's
-flips and optional depth noise, class-balanced loss, Adam, a checkpoint after every epoch
-(``DIR/checkpoint.pt``; a rerun resumes from it), the learning curve in ``DIR/history.json``,
+flips (both together: the 180-degree rotation) and optional depth noise, class-balanced loss,
+Adam with a per-epoch step-size decay, a checkpoint after every epoch (``DIR/checkpoint.pt``; a
+rerun resumes from it), the learning curve in ``DIR/history.json`` and ``DIR/learning_curve.png``,
 and the final network exported for the Rust runtime (``DIR/gqcnn.json`` + ``.safetensors``)
 with its validation (and test) figures.
+
+Under ``torchrun`` (``WORLD_SIZE`` > 1) the run is data-parallel with torch's
+DistributedDataParallel on the gloo backend (CPU): every process draws the same global batch
+and takes every ``WORLD_SIZE``-th sample of it, and the loss is normalised by the global batch,
+so the averaged gradient is the single-process gradient; process 0 validates, checkpoints and
+exports.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from dataclasses import asdict, dataclass
@@ -21,12 +30,15 @@ from typing import Any
 
 import numpy as np
 import torch
+import torch.distributed as dist
 from torch import nn
+from torch.nn import functional as F
 
 from mvgrasp_training.config import ExperimentConfig, load_config
 from mvgrasp_training.export import export_gqcnn
 from mvgrasp_training.gqcnn import ARCHITECTURES, GQCNN
 from mvgrasp_training.grasp_shards import GraspDataset
+from mvgrasp_training.plots import plot_history
 
 
 @dataclass
@@ -113,8 +125,31 @@ def augment(depth: torch.Tensor, gen: torch.Generator, config: ExperimentConfig)
     return depth
 
 
+def _world() -> tuple[int, int]:
+    """This process's rank and the number of processes (torchrun's environment; 0, 1 alone)."""
+    return int(os.environ.get("RANK", "0")), int(os.environ.get("WORLD_SIZE", "1"))
+
+
 def train(config: ExperimentConfig, out: Path, test_dir: Path | None = None) -> dict[str, Any]:
-    """Runs (or resumes) the experiment; returns the report written beside the weights."""
+    """Runs (or resumes) the experiment; returns the report written beside the weights.
+
+    Under torchrun every process calls this; process 0 writes the files.
+    """
+    rank, world = _world()
+    joined = world > 1 and not dist.is_initialized()
+    if joined:
+        dist.init_process_group("gloo")
+    try:
+        return _train(config, out, test_dir, rank, world)
+    finally:
+        if joined:
+            dist.destroy_process_group()
+
+
+def _train(
+    config: ExperimentConfig, out: Path, test_dir: Path | None, rank: int, world: int
+) -> dict[str, Any]:
+    lead = rank == 0
     out.mkdir(parents=True, exist_ok=True)
     if config.train.threads:
         torch.set_num_threads(config.train.threads)
@@ -134,12 +169,11 @@ def train(config: ExperimentConfig, out: Path, test_dir: Path | None = None) -> 
         net.parameters(), lr=config.train.learning_rate, weight_decay=config.train.weight_decay
     )
     positive_rate = float(train_set.label.mean())
-    weight = (
+    class_weight = (
         torch.tensor([0.5 / max(1 - positive_rate, 1e-6), 0.5 / max(positive_rate, 1e-6)])
         if config.train.balance_classes
-        else None
+        else torch.ones(2)
     )
-    loss_fn = nn.CrossEntropyLoss(weight=weight)
     checkpoint = out / "checkpoint.pt"
     history: list[dict[str, Any]] = []
     start_epoch = 0
@@ -148,58 +182,85 @@ def train(config: ExperimentConfig, out: Path, test_dir: Path | None = None) -> 
         net.load_state_dict(state["net"])
         optimiser.load_state_dict(state["optimiser"])
         history, start_epoch = state["history"], state["epoch"]
-        print(f"resuming after epoch {start_epoch}", file=sys.stderr)
+        if lead:
+            print(f"resuming after epoch {start_epoch}", file=sys.stderr)
+    model: nn.Module = net
+    if world > 1:
+        model = nn.parallel.DistributedDataParallel(net)
     gen = torch.Generator().manual_seed(config.seed)
     depth_all = torch.from_numpy(train_set.depth)
     pose_all = torch.from_numpy(train_set.pose)
     label_all = torch.from_numpy(train_set.label)
     n, batch = len(train_set), config.train.batch_size
+    # A last partial batch too small to give every process a sample is dropped.
+    steps = max(1, n // batch + (1 if n % batch >= world else 0))
+    mine = slice(rank, None, world)
     for epoch in range(start_epoch, config.train.epochs):
         gen.manual_seed(config.seed * 1000 + epoch)
-        net.train()
+        for group in optimiser.param_groups:
+            group["lr"] = config.train.learning_rate * config.train.learning_rate_decay**epoch
+        model.train()
         order = torch.randperm(n, generator=gen)
         started, total = time.time(), 0.0
-        steps = max(1, (n + batch - 1) // batch)
         for step in range(steps):
             idx = order[step * batch : (step + 1) * batch]
+            # Every process draws the whole batch's augmentation, so the random stream (and
+            # the result) does not depend on the number of processes.
             depth = augment(depth_all[idx], gen, config)
-            loss = loss_fn(net(depth, pose_all[idx]), label_all[idx])
+            label = label_all[idx]
+            weight = class_weight[label]
+            per_sample = F.cross_entropy(model(depth[mine], pose_all[idx][mine]), label[mine],
+                                         reduction="none")
+            # DDP averages gradients over processes: scaled by `world`, the average is the
+            # gradient of the weighted mean over the global batch.
+            loss = (weight[mine] * per_sample).sum() / weight.sum() * world
             optimiser.zero_grad()
             loss.backward()
             optimiser.step()
-            total += loss.item()
-            if step % 50 == 0 or step == steps - 1:
+            total += loss.item() / world
+            if lead and (step % 50 == 0 or step == steps - 1):
                 rate = (step + 1) * batch / max(time.time() - started, 1e-9)
                 left = (steps - step - 1) * batch / max(rate, 1e-9)
                 print(
                     f"\repoch {epoch + 1}/{config.train.epochs} step {step + 1}/{steps} "
-                    f"loss {total / (step + 1):.4f} {rate:.0f} crops/s {left:.0f} s left",
+                    f"loss {total * world / (step + 1):.4f} {rate:.0f} crops/s {left:.0f} s left",
                     end="",
                     file=sys.stderr,
                 )
-        val = metrics(predict(net, val_set), val_set.label)
-        history.append({"epoch": epoch + 1, "loss": total / steps, "val": val})
-        print(f"\nepoch {epoch + 1}: val {json.dumps(val)}", file=sys.stderr)
-        torch.save(
-            {"net": net.state_dict(), "optimiser": optimiser.state_dict(),
-             "history": history, "epoch": epoch + 1},
-            checkpoint,
-        )
+        if world > 1:
+            summed = torch.tensor([total], dtype=torch.float64)
+            dist.all_reduce(summed)
+            total = float(summed.item())
+        if lead:
+            val = metrics(predict(net, val_set), val_set.label)
+            history.append({"epoch": epoch + 1, "loss": total / steps, "val": val})
+            print(f"\nepoch {epoch + 1}: val {json.dumps(val)}", file=sys.stderr)
+            state = {"net": net.state_dict(), "optimiser": optimiser.state_dict(),
+                     "history": history, "epoch": epoch + 1}
+            partial = checkpoint.with_suffix(".pt.partial")
+            torch.save(state, partial)
+            partial.replace(checkpoint)
+        if world > 1:
+            dist.barrier()
     report: dict[str, Any] = {
         "config": json.loads(json.dumps(asdict(config), default=str)),
         "dataset": str(config.data.dataset_dir),
         "train_count": len(train_set),
         "train_objects": int(len(np.unique(train_set.object_id))),
-        "val": metrics(predict(net, val_set), val_set.label),
         "val_objects": int(len(np.unique(val_set.object_id))),
-        "history": history,
+        "processes": world,
         "date": time.strftime("%Y-%m-%d"),
     }
+    if not lead:
+        return report
+    report["val"] = metrics(predict(net, val_set), val_set.label)
+    report["history"] = history
     if test_dir is not None:
         test = load_arrays(test_dir, pose_inputs)
         report["test"] = metrics(predict(net, test), test.label)
         report["test_dataset"] = str(test_dir)
     (out / "history.json").write_text(json.dumps(history, indent=2) + "\n")
+    plot_history(history, out / "learning_curve.png", title=config.name)
     export_gqcnn(net, out / "gqcnn", report)
     return report
 
@@ -211,7 +272,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--test-dataset", type=Path)
     args = parser.parse_args(argv)
     report = train(load_config(args.config), args.out, args.test_dataset)
-    print(json.dumps({k: report[k] for k in ("val", "test") if k in report}, indent=2))
+    if "val" in report:
+        print(json.dumps({k: report[k] for k in ("val", "test") if k in report}, indent=2))
     return 0
 
 

@@ -66,3 +66,27 @@ def test_export_writes_every_tensor_and_the_description(tmp_path) -> None:
     assert set(tensors) == set(net.state_dict()) == set(description["tensors"])
     for name, value in net.state_dict().items():
         assert torch.equal(tensors[name], value)
+
+
+def test_an_export_reads_back_into_the_same_network(tmp_path) -> None:
+    from safetensors.torch import load_file, save_file
+
+    from mvgrasp_training.export import export_gqcnn, load_gqcnn
+
+    torch.manual_seed(1)
+    net = GQCNN(ARCHITECTURES["small"](pose_inputs=2)).eval()
+    net.set_normalisation(0.7, 0.05, torch.tensor([0.7, 1.0]), torch.tensor([0.05, 0.3]))
+    path = export_gqcnn(net, tmp_path / "net")
+    back, description = load_gqcnn(path)
+    assert description["architecture"]["pose_inputs"] == 2
+    depth, pose = torch.rand(5, 1, 32, 32) + 0.5, torch.rand(5, 2)
+    with torch.no_grad():
+        assert torch.equal(net(depth, pose), back(depth, pose))
+    tensors = load_file(str(tmp_path / "net.safetensors"))
+    tensors["image_fc.weight"] = tensors["image_fc.weight"][:, :-1].contiguous()
+    save_file(tensors, str(tmp_path / "net.safetensors"))
+    with pytest.raises(ValueError, match=r"net\.safetensors: tensor image_fc\.weight has shape"):
+        load_gqcnn(path)
+    (tmp_path / "bad.json").write_text('{"format": "something-else"}')
+    with pytest.raises(ValueError, match=r"bad\.json: format 'something-else'"):
+        load_gqcnn(tmp_path / "bad.json")

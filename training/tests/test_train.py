@@ -7,22 +7,27 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 torch = pytest.importorskip("torch")
 pytest.importorskip("mvgrasp.grasp_dataset")
 
 from mvgrasp_training.config import parse_config  # noqa: E402
+from mvgrasp_training.gqcnn import GQCNN, small  # noqa: E402
 from mvgrasp_training.train import train  # noqa: E402
 
 
-def test_a_short_run_trains_resumes_and_exports(tmp_path: Path) -> None:
-    config_toml = tmp_path / "small.toml"
+@pytest.fixture(scope="module")
+def dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A small grasp dataset of four built-in objects, made by the wheel."""
+    root = tmp_path_factory.mktemp("grasps")
+    config_toml = root / "small.toml"
     config_toml.write_text(
         "stable_poses_per_object = 1\ngrasps_per_pose = 24\nviews_per_pose = 3\n"
         "objects_per_shard = 2\nphysics_fraction = 0.0\n"
     )
-    data = tmp_path / "data"
+    data = root / "data"
     # In its own process: the renderer's Mesa LLVM and the LLVM in torch's triton, loaded into
     # one process, crash it.
     subprocess.run(
@@ -36,6 +41,11 @@ def test_a_short_run_trains_resumes_and_exports(tmp_path: Path) -> None:
         ],
         check=True,
     )
+    return data
+
+
+def test_a_short_run_trains_resumes_and_exports(dataset: Path, tmp_path: Path) -> None:
+    data = dataset
     config = parse_config(
         {
             "name": "test",
@@ -62,3 +72,41 @@ def test_a_short_run_trains_resumes_and_exports(tmp_path: Path) -> None:
     )
     report = train(longer, out)
     assert [h["epoch"] for h in report["history"]] == [1, 2]
+    assert (out / "learning_curve.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def _tensors(path: Path) -> dict[str, np.ndarray]:
+    from safetensors.numpy import load_file
+
+    return load_file(str(path))
+
+
+def test_two_processes_with_ddp_train_the_network_one_process_trains(
+    dataset: Path, tmp_path: Path
+) -> None:
+    """torchrun, gloo, 2 processes on the CPU: the same weights as one process (to rounding)."""
+    config = tmp_path / "ddp.toml"
+    config.write_text(
+        f'name = "ddp"\nseed = 3\n[data]\ndataset_dir = "{dataset}"\nval_fraction = 0.25\n'
+        "[train]\nepochs = 2\nbatch_size = 16\nlearning_rate = 1e-3\nthreads = 1\n"
+    )
+    run = [sys.executable, "-m", "mvgrasp_training.train", str(config), "--out"]
+    subprocess.run([*run, str(tmp_path / "one")], check=True, timeout=600)
+    torchrun = [sys.executable, "-m", "torch.distributed.run", "--standalone", "--nproc_per_node",
+                "2", "-m", "mvgrasp_training.train", str(config), "--out"]
+    subprocess.run([*torchrun, str(tmp_path / "two")], check=True, timeout=600)
+    described = json.loads((tmp_path / "two" / "gqcnn.json").read_text())
+    assert described["training"]["processes"] == 2
+    assert [h["epoch"] for h in described["training"]["history"]] == [1, 2]
+    one = _tensors(tmp_path / "one" / "gqcnn.safetensors")
+    two = _tensors(tmp_path / "two" / "gqcnn.safetensors")
+    torch.manual_seed(3)  # the config's seed: the initial weights of both runs
+    initial = GQCNN(small()).state_dict()
+    assert one.keys() == two.keys()
+    for name in one:
+        moved = np.abs(one[name] - initial[name].numpy()).max()
+        apart = np.abs(one[name] - two[name]).max()
+        print(f"{name}: moved {moved:.2e}, one vs two processes {apart:.2e}")
+        if name.endswith(("weight", "bias")):
+            assert moved > 1e-3, name  # both runs trained
+        assert apart < 1e-4, name

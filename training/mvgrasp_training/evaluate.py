@@ -1,0 +1,42 @@
+"""Scores an exported GQ-CNN on grasp datasets.
+
+    python -m mvgrasp_training.evaluate MODEL.json DATASET [DATASET ...]
+
+Prints, per dataset, the balanced accuracy, accuracy, precision and recall of the robust label
+at 0.5 as JSON. The network takes what its pose stream takes from each datapoint: the grasp
+depth, and theta for a multi-view GQ-CNN; a top-down GQ-CNN applied to a multi-view dataset
+sees each crop with its depth alone (the paper's reason for the multi-view GQ-CNN).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import Any
+
+from mvgrasp_training.export import load_gqcnn
+from mvgrasp_training.train import load_arrays, metrics, predict
+
+
+def evaluate(model: str | Path, datasets: list[str | Path]) -> dict[str, dict[str, Any]]:
+    """The metrics of the export at ``model`` on each dataset, keyed by the dataset's path."""
+    net, _ = load_gqcnn(model)
+    results = {}
+    for root in datasets:
+        data = load_arrays(Path(root), net.arch.pose_inputs)
+        results[str(root)] = metrics(predict(net, data), data.label)
+    return results
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("model", type=Path, help="an export's JSON (NAME.json)")
+    parser.add_argument("datasets", type=Path, nargs="+", help="grasp_dataset output folders")
+    args = parser.parse_args(argv)
+    print(json.dumps(evaluate(args.model, args.datasets), indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

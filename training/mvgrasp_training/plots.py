@@ -1,0 +1,41 @@
+"""Learning-curve plots (PNG) of a training history."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+
+def plot_history(history: list[dict[str, Any]], path: str | Path, title: str = "") -> Path:
+    """Writes the training loss and the validation balanced accuracy, precision and recall per
+    epoch to ``path`` (a PNG); returns the path."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    epochs = [h["epoch"] for h in history]
+    fig, (ax_loss, ax_val) = plt.subplots(1, 2, figsize=(10, 4), dpi=100)
+    ax_loss.plot(epochs, [h["loss"] for h in history], marker="o", label="training loss")
+    ax_loss.set_xlabel("epoch")
+    ax_loss.set_ylabel("class-balanced cross-entropy")
+    ax_loss.grid(alpha=0.3)
+    ax_loss.legend()
+    for key, label in (
+        ("balanced_accuracy", "balanced accuracy"),
+        ("precision", "precision at 0.5"),
+        ("recall", "recall at 0.5"),
+    ):
+        ax_val.plot(epochs, [h["val"][key] for h in history], marker="o", label=label)
+    ax_val.set_xlabel("epoch")
+    ax_val.set_ylabel("validation (held-out objects)")
+    ax_val.set_ylim(0.5, 1.0)
+    ax_val.grid(alpha=0.3)
+    ax_val.legend(loc="lower right")
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path)
+    plt.close(fig)
+    return path
