@@ -6,8 +6,10 @@
 Object-wise split (``data.val_fraction`` of the objects held out, chosen by the seed), Dex-Net's
 flips (both together: the 180-degree rotation) and optional depth noise, class-balanced loss,
 Adam with a per-epoch step-size decay, a checkpoint after every epoch (``DIR/checkpoint.pt``; a
-rerun resumes from it), the learning curve in ``DIR/history.json`` and ``DIR/learning_curve.png``,
-and the final network exported for the Rust runtime (``DIR/gqcnn.json`` + ``.safetensors``)
+rerun resumes from it), the weights of the epoch with the best validation balanced accuracy
+kept (early stopping on the held-out objects; the test split never chooses), the learning curve in ``DIR/history.json`` and ``DIR/learning_curve.png``,
+and the final network exported for the Rust runtime (``DIR/NAME.json`` + ``.safetensors``, NAME
+the config's name)
 with its validation (and test) figures.
 
 Under ``torchrun`` (``WORLD_SIZE`` > 1) the run is data-parallel with torch's
@@ -20,6 +22,7 @@ exports.
 from __future__ import annotations
 
 import argparse
+import copy
 import json
 import os
 import sys
@@ -125,6 +128,10 @@ def augment(depth: torch.Tensor, gen: torch.Generator, config: ExperimentConfig)
     return depth
 
 
+def _best_accuracy(history: list[dict[str, Any]], best: dict[str, Any]) -> float:
+    return float(history[best["epoch"] - 1]["val"]["balanced_accuracy"])
+
+
 def _world() -> tuple[int, int]:
     """This process's rank and the number of processes (torchrun's environment; 0, 1 alone)."""
     return int(os.environ.get("RANK", "0")), int(os.environ.get("WORLD_SIZE", "1"))
@@ -177,11 +184,13 @@ def _train(
     checkpoint = out / "checkpoint.pt"
     history: list[dict[str, Any]] = []
     start_epoch = 0
+    # The weights of the epoch with the best validation balanced accuracy: what is exported.
+    best: dict[str, Any] = {"epoch": 0, "net": None}
     if checkpoint.exists():
         state = torch.load(checkpoint, weights_only=False)
         net.load_state_dict(state["net"])
         optimiser.load_state_dict(state["optimiser"])
-        history, start_epoch = state["history"], state["epoch"]
+        history, start_epoch, best = state["history"], state["epoch"], state["best"]
         if lead:
             print(f"resuming after epoch {start_epoch}", file=sys.stderr)
     model: nn.Module = net
@@ -235,8 +244,10 @@ def _train(
             val = metrics(predict(net, val_set), val_set.label)
             history.append({"epoch": epoch + 1, "loss": total / steps, "val": val})
             print(f"\nepoch {epoch + 1}: val {json.dumps(val)}", file=sys.stderr)
+            if best["net"] is None or val["balanced_accuracy"] > _best_accuracy(history, best):
+                best = {"epoch": epoch + 1, "net": copy.deepcopy(net.state_dict())}
             state = {"net": net.state_dict(), "optimiser": optimiser.state_dict(),
-                     "history": history, "epoch": epoch + 1}
+                     "history": history, "epoch": epoch + 1, "best": best}
             partial = checkpoint.with_suffix(".pt.partial")
             torch.save(state, partial)
             partial.replace(checkpoint)
@@ -253,6 +264,9 @@ def _train(
     }
     if not lead:
         return report
+    if best["net"] is not None:
+        net.load_state_dict(best["net"])
+    report["selected_epoch"] = best["epoch"]
     report["val"] = metrics(predict(net, val_set), val_set.label)
     report["history"] = history
     if test_dir is not None:
@@ -261,7 +275,7 @@ def _train(
         report["test_dataset"] = str(test_dir)
     (out / "history.json").write_text(json.dumps(history, indent=2) + "\n")
     plot_history(history, out / "learning_curve.png", title=config.name)
-    export_gqcnn(net, out / "gqcnn", report)
+    export_gqcnn(net, out / config.name, report)
     return report
 
 
