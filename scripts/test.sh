@@ -8,11 +8,13 @@
 # It installs nothing from the network and assumes the tools are there (.ci/run installs them
 # on a fresh Debian machine):
 #   - cargo with the rustfmt and clippy components;
-#   - a Python >= 3.10 environment holding maturin>=1.16,<2, pytest, numpy, setuptools>=77 and ray>=2.9.
+#   - a Python >= 3.10 environment holding maturin>=1.16,<2, pytest, numpy, setuptools>=77,
+#     ray>=2.9, safetensors, matplotlib and torch>=2 (the training tests run, never skip, here).
 #
 # Python environment: the active virtualenv ($VIRTUAL_ENV) when there is one, else ./.venv at
 # the repository root (make it with .ci/run, or by hand:
-#   python3 -m venv .venv && .venv/bin/pip install 'maturin>=1.16,<2' pytest numpy 'setuptools>=77' 'ray>=2.9').
+#   python3 -m venv .venv && .venv/bin/pip install 'maturin>=1.16,<2' pytest numpy 'setuptools>=77' 'ray>=2.9' \
+#       safetensors matplotlib torch).
 # The wheel is built into target/wheels/mvgrasp/ (emptied first; outside any venv) and installed
 # into that environment with --force-reinstall --no-deps; training/ is installed editable.
 #
@@ -82,6 +84,9 @@ wants = {
     "numpy": lambda v: True,
     "setuptools": lambda v: v >= (77, 0),
     "ray": lambda v: v >= (2, 9),
+    "safetensors": lambda v: True,
+    "matplotlib": lambda v: True,
+    "torch": lambda v: v >= (2, 0),
 }
 bad = [name for name, ok in wants.items() if version(name) is None or not ok(version(name))]
 if sys.version_info < (3, 10):

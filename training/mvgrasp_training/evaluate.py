@@ -3,7 +3,8 @@
     python -m mvgrasp_training.evaluate MODEL.json DATASET [DATASET ...]
 
 Prints, per dataset, the balanced accuracy, accuracy, precision and recall of the robust label
-at 0.5 as JSON. The network takes what its pose stream takes from each datapoint: the grasp
+at 0.5 as JSON, and precision and recall at the stricter thresholds a planner that takes only
+confident grasps uses (0.8, 0.9). The network takes what its pose stream takes from each datapoint: the grasp
 depth, and theta for a multi-view GQ-CNN; a top-down GQ-CNN applied to a multi-view dataset
 sees each crop with its depth alone (the paper's reason for the multi-view GQ-CNN).
 """
@@ -25,7 +26,16 @@ def evaluate(model: str | Path, datasets: list[str | Path]) -> dict[str, dict[st
     results = {}
     for root in datasets:
         data = load_arrays(Path(root), net.arch.pose_inputs)
-        results[str(root)] = metrics(predict(net, data), data.label)
+        prob = predict(net, data)
+        result = metrics(prob, data.label)
+        for threshold in (0.8, 0.9):
+            above = prob > threshold
+            positive = data.label == 1
+            result[f"precision_at_{threshold}"] = (
+                float((above & positive).sum() / above.sum()) if above.any() else float("nan")
+            )
+            result[f"recall_at_{threshold}"] = float((above & positive).sum() / max(positive.sum(), 1))
+        results[str(root)] = result
     return results
 
 

@@ -90,3 +90,28 @@ def test_an_export_reads_back_into_the_same_network(tmp_path) -> None:
     (tmp_path / "bad.json").write_text('{"format": "something-else"}')
     with pytest.raises(ValueError, match=r"bad\.json: format 'something-else'"):
         load_gqcnn(tmp_path / "bad.json")
+
+
+def test_evaluate_scores_an_export_on_a_dataset(tmp_path, monkeypatch) -> None:
+    import mvgrasp_training.evaluate as evaluate
+    from mvgrasp_training.export import export_gqcnn
+    from mvgrasp_training.train import Arrays
+
+    torch.manual_seed(2)
+    net = GQCNN(ARCHITECTURES["small"](pose_inputs=1)).eval()
+    path = export_gqcnn(net, tmp_path / "net")
+    rng = np.random.default_rng(0)
+    data = Arrays(
+        depth=rng.uniform(0.6, 0.7, (50, 1, 32, 32)).astype(np.float32),
+        pose=rng.uniform(0.6, 0.7, (50, 1)).astype(np.float32),
+        label=rng.integers(0, 2, 50),
+        object_id=np.zeros(50, dtype=np.int64),
+    )
+    monkeypatch.setattr(evaluate, "load_arrays", lambda root, pose_inputs: data)
+    result = evaluate.evaluate(path, [tmp_path / "data"])[str(tmp_path / "data")]
+    with torch.no_grad():
+        prob = torch.softmax(net(torch.from_numpy(data.depth), torch.from_numpy(data.pose)), 1)[:, 1]
+    predicted = (prob.numpy() > 0.5) == (data.label == 1)
+    assert result["count"] == 50
+    assert abs(result["accuracy"] - predicted.mean()) < 1e-9
+    assert 0.0 <= result["recall_at_0.9"] <= result["recall_at_0.8"] <= result["recall"] <= 1.0
