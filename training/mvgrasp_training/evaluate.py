@@ -1,10 +1,12 @@
 """Scores an exported GQ-CNN on grasp datasets.
 
-    python -m mvgrasp_training.evaluate MODEL.json DATASET [DATASET ...]
+    python -m mvgrasp_training.evaluate MODEL.json DATASET [DATASET ...] [--held-out F --seed S]
 
 Prints, per dataset, the balanced accuracy, accuracy, precision and recall of the robust label
 at 0.5 as JSON, and precision and recall at the stricter thresholds a planner that takes only
-confident grasps uses (0.8, 0.9). The network takes what its pose stream takes from each datapoint: the grasp
+confident grasps uses (0.8, 0.9). With ``--held-out F --seed S`` only the objects a training
+config with ``val_fraction = F`` and ``seed = S`` holds out are scored (the validation objects of
+that run: a network trained with that config never saw them). The network takes what its pose stream takes from each datapoint: the grasp
 depth, and theta for a multi-view GQ-CNN; a top-down GQ-CNN applied to a multi-view dataset
 sees each crop with its depth alone (the paper's reason for the multi-view GQ-CNN).
 """
@@ -17,15 +19,22 @@ from pathlib import Path
 from typing import Any
 
 from mvgrasp_training.export import load_gqcnn
-from mvgrasp_training.train import load_arrays, metrics, predict
+from mvgrasp_training.train import load_arrays, metrics, predict, split_by_object
 
 
-def evaluate(model: str | Path, datasets: list[str | Path]) -> dict[str, dict[str, Any]]:
-    """The metrics of the export at ``model`` on each dataset, keyed by the dataset's path."""
+def evaluate(
+    model: str | Path,
+    datasets: list[str | Path],
+    held_out: tuple[float, int] | None = None,
+) -> dict[str, dict[str, Any]]:
+    """The metrics of the export at ``model`` on each dataset, keyed by the dataset's path;
+    ``held_out = (val_fraction, seed)`` scores only the objects such a split holds out."""
     net, _ = load_gqcnn(model)
     results = {}
     for root in datasets:
         data = load_arrays(Path(root), net.arch.pose_inputs)
+        if held_out is not None:
+            data = split_by_object(data, *held_out)[1]
         prob = predict(net, data)
         result = metrics(prob, data.label)
         for threshold in (0.8, 0.9):
@@ -43,8 +52,11 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("model", type=Path, help="an export's JSON (NAME.json)")
     parser.add_argument("datasets", type=Path, nargs="+", help="grasp_dataset output folders")
+    parser.add_argument("--held-out", type=float, help="score only this split's held-out objects")
+    parser.add_argument("--seed", type=int, default=0, help="the split's seed (with --held-out)")
     args = parser.parse_args(argv)
-    print(json.dumps(evaluate(args.model, args.datasets), indent=2))
+    held_out = None if args.held_out is None else (args.held_out, args.seed)
+    print(json.dumps(evaluate(args.model, args.datasets, held_out), indent=2))
     return 0
 
 

@@ -115,3 +115,7 @@ def test_evaluate_scores_an_export_on_a_dataset(tmp_path, monkeypatch) -> None:
     assert result["count"] == 50
     assert abs(result["accuracy"] - predicted.mean()) < 1e-9
     assert 0.0 <= result["recall_at_0.9"] <= result["recall_at_0.8"] <= result["recall"] <= 1.0
+    # Held out: only the objects a 0.5 split with seed 0 holds out (one of the two here).
+    data.object_id[25:] = 1
+    held = evaluate.evaluate(path, [tmp_path / "data"], held_out=(0.5, 0))[str(tmp_path / "data")]
+    assert held["count"] == 25
