@@ -15,6 +15,9 @@ pub enum Error {
     /// Rendering.
     #[error(transparent)]
     Render(#[from] mvgrasp_render::RenderError),
+    /// Networks: loading weights, running them.
+    #[error(transparent)]
+    Infer(#[from] mvgrasp_infer::InferError),
     /// A file or folder could not be read or written.
     #[error("{path}: cannot {op}: {source}")]
     Io {

@@ -11,6 +11,7 @@ pub mod dataset;
 pub mod error;
 pub mod grasp_dataset;
 pub mod grasp_image;
+pub mod planner;
 pub mod report;
 
 pub use error::{Error, Result};

@@ -28,15 +28,49 @@ fn plan_with_no_arguments_describes_the_built_in_mug() {
     assert!(text.contains("training views: 20 views"), "{text}");
     assert!(text.contains("test views:     10 views"), "{text}");
     assert!(text.contains("stable"), "{text}");
+    // The plan: the shipped GQ-CNN in the top-down view, the best grasp checked.
+    assert!(
+        text.contains("plan: gqcnn_small_topdown (GQ-CNN)")
+            && text.contains("1 view(s) 0.70 m away"),
+        "{text}"
+    );
+    assert!(text.contains("best grasp: view "), "{text}");
+    assert!(text.contains("g* = (p = ("), "{text}");
+    assert!(text.contains("analytic check: robust epsilon"), "{text}");
+    assert!(
+        text.contains("physics (rapier: close, lift, shake): "),
+        "{text}"
+    );
 }
 
 #[test]
 fn plan_json_is_complete_and_deterministic() {
-    let a = plan(&["--json", "--category", "box", "--index", "2"]);
-    let b = plan(&["--json", "--category", "box", "--index", "2"]);
+    let args = [
+        "--json",
+        "--category",
+        "box",
+        "--index",
+        "2",
+        "--model",
+        "gqcnn_small_multiview",
+        "--views",
+        "4",
+    ];
+    let a = plan(&args);
+    let b = plan(&args);
     assert!(a.status.success(), "{}", String::from_utf8_lossy(&a.stderr));
     assert_eq!(a.stdout, b.stdout, "the same seed gives the same bytes");
     let report: serde_json::Value = serde_json::from_slice(&a.stdout).unwrap();
+    assert_eq!(report["model"], "gqcnn_small_multiview");
+    let plan = &report["plan"];
+    assert_eq!(plan["views"].as_array().unwrap().len(), 4);
+    assert_eq!(plan["cameras"].as_array().unwrap().len(), 4);
+    let quality = plan["best"]["quality"].as_f64().unwrap();
+    assert!((0.0..=1.0).contains(&quality), "{quality}");
+    assert_eq!(plan["top"][0], plan["best"]);
+    assert!(plan["physics"]["success"].is_boolean());
+    assert!(plan["analytic"]["robust_epsilon"].as_f64().unwrap() >= 0.0);
+    let report = &report["object"];
     assert_eq!(report["training_views"].as_array().unwrap().len(), 20);
     assert_eq!(report["test_views"].as_array().unwrap().len(), 10);
     let poses = report["stable_poses"].as_array().unwrap();
@@ -55,6 +89,10 @@ fn plan_reports_bad_input_in_one_line_and_exits_2() {
         &["--category", "spaceship"][..],
         &["--camera", "kinect"][..],
         &["--mesh", "Cargo.toml"][..],
+        &["--model", "no_such_network"][..],
+        &["--model", "/nonexistent/net.json"][..],
+        &["--views", "0"][..],
+        &["--distance-m", "0"][..],
     ] {
         let out = plan(args);
         assert_eq!(out.status.code(), Some(2), "{args:?}");

@@ -1,15 +1,27 @@
-//! `plan`: the main job. With no arguments it takes the built-in default object (a procedural
-//! mug) and reports what the planner knows about it: mesh facts, stable poses, camera views.
-//! Grasp planning joins this command as its issues land.
+//! `plan`: the main job. With no arguments it rests the built-in default object (a procedural
+//! mug) on a table in its most probable stable pose, renders its depth from a top-down camera
+//! 0.7 m above it, plans a grasp with the shipped GQ-CNN, lifts it to the world, and checks it
+//! analytically (robust Ferrari-Canny, collision) and in physics (rapier: close, lift, shake).
+//! `--model gqcnn_small_multiview` plans with the multi-view GQ-CNN in the seed paper's 10 test
+//! views (the first top-down) and returns the best over all of them. The default is the one
+//! whose grasps held most often in physics (models/README.md).
+//!
+//! Depth comes from the renderer today; the Learnt Stereo Machine's depth from RGB takes its
+//! place when it lands.
 
+use std::path::Path;
 use std::process::ExitCode;
 
 use clap::Parser;
 use mvgrasp::cli::ObjectArgs;
 use mvgrasp::geometry::{Intrinsics, IntrinsicsPreset};
+use mvgrasp::infer::Gqcnn;
+use mvgrasp::planner::{GqcnnPolicy, PlanParams, PlanReport, ViewSetting, models, plan_grasp};
+use mvgrasp::render::{Backend, Renderer};
 use mvgrasp::{ObjectReport, ReportParams};
+use serde::Serialize;
 
-/// Plan for an object: today, describe it (mesh facts, stable poses, hemisphere views).
+/// Plan a 6-DoF parallel-jaw grasp for an object seen by cameras around it.
 #[derive(Parser, Debug)]
 #[command(version, about)]
 struct Args {
@@ -18,6 +30,27 @@ struct Args {
     /// Camera intrinsics preset: phoxi_s, primesense, realsense_d435.
     #[arg(long, default_value = "phoxi_s")]
     camera: String,
+    /// The network: a shipped one (gqcnn_small_topdown, gqcnn_small_multiview) or an export's
+    /// JSON (training/: NAME.json beside NAME.safetensors).
+    #[arg(long, default_value = "gqcnn_small_topdown")]
+    model: String,
+    /// Plan in the first N of the 10 test views (1: the top-down view alone). Default: 1 for a
+    /// GQ-CNN, 10 for a multi-view GQ-CNN.
+    #[arg(long)]
+    views: Option<usize>,
+    /// Camera distance from the object, metres. Default: 0.7 for a GQ-CNN, 0.65 for a
+    /// multi-view GQ-CNN (the middle of what each was trained on).
+    #[arg(long)]
+    distance_m: Option<f32>,
+    /// The stable pose to rest the object in: 0 is the most probable that is not marginal.
+    #[arg(long, default_value_t = 0)]
+    stable_pose: usize,
+    /// Skip the physics trial of the chosen grasp.
+    #[arg(long)]
+    no_physics: bool,
+    /// Graphics backend: auto, vulkan, gl, metal, dx12 (or MVGRASP_RENDER_BACKEND).
+    #[arg(long, default_value = "auto")]
+    backend: String,
     /// Print the full report as JSON on stdout instead of the summary.
     #[arg(long)]
     json: bool,
@@ -27,21 +60,170 @@ fn main() -> ExitCode {
     mvgrasp::cli::exit(run(&Args::parse()))
 }
 
+#[derive(Serialize)]
+struct Report<'a> {
+    object: &'a ObjectReport,
+    model: &'a str,
+    plan: &'a PlanReport,
+}
+
 fn run(args: &Args) -> Result<(), String> {
+    if args.views == Some(0) {
+        return Err("--views: at least 1".into());
+    }
+    if args.distance_m.is_some_and(|d| !(d.is_finite() && d > 0.0)) {
+        return Err("--distance-m: a distance in metres above 0".into());
+    }
     let preset: IntrinsicsPreset = args.camera.parse().map_err(|e| format!("--camera: {e}"))?;
+    let intrinsics = Intrinsics::preset(preset);
     let object = args.object.load()?;
-    let params = ReportParams {
-        intrinsics: Intrinsics::preset(preset),
-        views_seed: args.object.seed,
+    let description = ObjectReport::describe(
+        &object.display_name,
+        &object.mesh,
+        &ReportParams {
+            intrinsics,
+            views_seed: args.object.seed,
+            ..Default::default()
+        },
+    )
+    .map_err(|e| e.to_string())?;
+    let (model_name, net) = load_model(&args.model)?;
+    let setting = ViewSetting::for_pose_inputs(net.architecture().pose_inputs);
+    let mut params = PlanParams {
+        max_views: args.views.unwrap_or(setting.views),
+        intrinsics,
+        stable_pose: args.stable_pose,
+        seed: args.object.seed,
+        physics: !args.no_physics,
         ..Default::default()
     };
-    let report = ObjectReport::describe(&object.display_name, &object.mesh, &params)
-        .map_err(|e| e.to_string())?;
+    params.views.radius_m = args.distance_m.unwrap_or(setting.distance_m);
+    let gripper = params.labels.gripper().map_err(|e| e.to_string())?;
+    let policy = GqcnnPolicy::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
+    let backend = Backend::parse(&args.backend).ok_or_else(|| {
+        format!(
+            "--backend: unknown backend {:?} (expected auto, vulkan, gl, metal, dx12)",
+            args.backend
+        )
+    })?;
+    let renderer = Renderer::new(backend).map_err(|e| e.to_string())?;
+    let plan = plan_grasp(&renderer, &object.mesh, &policy, &params).map_err(|e| e.to_string())?;
     if args.json {
+        let report = Report {
+            object: &description,
+            model: &model_name,
+            plan: &plan,
+        };
         let json = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
         println!("{json}");
     } else {
-        print!("{}", report.summary());
+        print!("{}", description.summary());
+        print!(
+            "{}",
+            summary(&model_name, policy.net(), &plan, params.views.radius_m)
+        );
     }
     Ok(())
+}
+
+/// A shipped network by name, or an export's JSON by path.
+fn load_model(model: &str) -> Result<(String, Gqcnn), String> {
+    if let Some(shipped) = models::shipped(model) {
+        let net = shipped.load().map_err(|e| e.to_string())?;
+        return Ok((shipped.name.to_string(), net));
+    }
+    let path = Path::new(model);
+    if path.extension().is_some_and(|e| e == "json") {
+        let net = Gqcnn::load(path).map_err(|e| e.to_string())?;
+        return Ok((path.display().to_string(), net));
+    }
+    let names: Vec<&str> = models::ALL.iter().map(|m| m.name).collect();
+    Err(format!(
+        "--model: {model:?} is neither a shipped network ({}) nor an export's .json",
+        names.join(", ")
+    ))
+}
+
+fn summary(model: &str, net: &Gqcnn, plan: &PlanReport, distance_m: f32) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let kind = if net.architecture().pose_inputs == 2 {
+        "multi-view GQ-CNN"
+    } else {
+        "GQ-CNN"
+    };
+    let _ = writeln!(
+        s,
+        "plan: {model} ({kind}), stable pose {} (probability {:.3}), {} view(s) {:.2} m away:",
+        plan.stable_pose,
+        plan.stable_pose_probability,
+        plan.views.len(),
+        distance_m
+    );
+    let _ = writeln!(s, "   view  elevation  candidates  best quality");
+    for (i, v) in plan.views.iter().enumerate() {
+        let best = v.best_quality.map_or("-".into(), |q| format!("{q:.3}"));
+        let _ = writeln!(
+            s,
+            "   {i:>4}  {:>5.1} deg  {:>10}  {best:>12}",
+            v.elevation_deg, v.candidates
+        );
+    }
+    let Some(best) = &plan.best else {
+        let _ = writeln!(
+            s,
+            "no grasp: no view had an antipodal candidate the gripper fits"
+        );
+        return s;
+    };
+    let p = best.grasp.center();
+    let _ = writeln!(
+        s,
+        "best grasp: view {} ({:.0} deg up), quality {:.3}, width {:.1} cm",
+        best.view,
+        best.theta_rad.to_degrees(),
+        best.quality,
+        best.grasp.width_m * 100.0
+    );
+    if let Some(paper) = &plan.best_paper {
+        let _ = writeln!(
+            s,
+            "  g* = (p = ({:+.3}, {:+.3}, {:+.3}) m, phi = {:.1} deg, theta = {:.1} deg)",
+            p.x,
+            p.y,
+            p.z,
+            paper.phi_rad.to_degrees(),
+            paper.theta_rad.to_degrees()
+        );
+    }
+    if let Some(a) = &plan.analytic {
+        let _ = writeln!(
+            s,
+            "  analytic check: robust epsilon {:.4}, {}, label {}",
+            a.robust_epsilon,
+            if a.collision_free {
+                "collision-free"
+            } else {
+                "the gripper collides"
+            },
+            if a.robust { "robust" } else { "not robust" }
+        );
+    }
+    if let Some(o) = &plan.physics {
+        let verdict = match o.failed_at {
+            None => format!(
+                "held (lifted {:.1} cm, slipped {:.1} mm)",
+                o.object_lift_m * 100.0,
+                o.slip_m * 1000.0
+            ),
+            Some(stage) => format!("failed at {stage:?}"),
+        };
+        let _ = writeln!(s, "  physics (rapier: close, lift, shake): {verdict}");
+    }
+    let _ = writeln!(
+        s,
+        "time: render {:.2} s, plan {:.2} s, checks {:.2} s",
+        plan.timings.render_s, plan.timings.plan_s, plan.timings.check_s
+    );
+    s
 }

@@ -28,7 +28,7 @@ pub mod cameras;
 pub mod config;
 pub mod crop;
 pub mod noise;
-mod object;
+pub(crate) mod object;
 pub mod preview;
 pub mod shard;
 

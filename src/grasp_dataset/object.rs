@@ -215,7 +215,7 @@ fn aligned_frame(
 }
 
 /// Depth images of `mesh` at `table_from_object` on a table, one per camera.
-fn render_depths(
+pub(crate) fn render_depths(
     renderer: &Renderer,
     mesh: &TriangleMesh,
     table_from_object: &Pose3,

@@ -6,10 +6,14 @@ use crate::error::{InferError, Result};
 ///
 /// The default tensor is empty (shape `[0]`): a ready output buffer for the ops' `_into` forms,
 /// which give it the shape they need and keep its allocation from call to call.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone)]
 pub struct Tensor {
     shape: Vec<usize>,
+    /// The values in `data[..len]`; past them, values of an earlier, larger shape, kept so that
+    /// a buffer that shrinks and grows again (as a model's intermediates do, layer by layer and
+    /// call by call) is not zero-filled each time it grows.
     data: Vec<f32>,
+    len: usize,
 }
 
 impl Default for Tensor {
@@ -17,7 +21,24 @@ impl Default for Tensor {
         Self {
             shape: vec![0],
             data: Vec::new(),
+            len: 0,
         }
+    }
+}
+
+impl PartialEq for Tensor {
+    /// Same shape and values.
+    fn eq(&self, other: &Self) -> bool {
+        self.shape == other.shape && self.data() == other.data()
+    }
+}
+
+impl std::fmt::Debug for Tensor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Tensor")
+            .field("shape", &self.shape)
+            .field("data", &self.data())
+            .finish()
     }
 }
 
@@ -38,6 +59,7 @@ impl Tensor {
         }
         Ok(Self {
             shape: shape.to_vec(),
+            len: data.len(),
             data,
         })
     }
@@ -49,9 +71,11 @@ impl Tensor {
 
     /// A tensor with every value `value`.
     pub fn full(shape: &[usize], value: f32) -> Self {
+        let len = shape.iter().product();
         Self {
             shape: shape.to_vec(),
-            data: vec![value; shape.iter().product()],
+            data: vec![value; len],
+            len,
         }
     }
 
@@ -67,26 +91,27 @@ impl Tensor {
 
     /// The number of values (the product of the shape).
     pub fn len(&self) -> usize {
-        self.data.len()
+        self.len
     }
 
     /// Whether the tensor holds no values.
     pub fn is_empty(&self) -> bool {
-        self.data.is_empty()
+        self.len == 0
     }
 
     /// The values, row-major.
     pub fn data(&self) -> &[f32] {
-        &self.data
+        &self.data[..self.len]
     }
 
     /// The values, row-major, mutable.
     pub fn data_mut(&mut self) -> &mut [f32] {
-        &mut self.data
+        &mut self.data[..self.len]
     }
 
     /// The values, row-major, by value.
-    pub fn into_data(self) -> Vec<f32> {
+    pub fn into_data(mut self) -> Vec<f32> {
+        self.data.truncate(self.len);
         self.data
     }
 
@@ -98,12 +123,12 @@ impl Tensor {
     /// [`InferError::DataLength`] when `shape` needs another number of values.
     pub fn reshape(&mut self, shape: &[usize]) -> Result<()> {
         let expected = shape.iter().product::<usize>();
-        if expected != self.data.len() {
+        if expected != self.len {
             return Err(InferError::DataLength {
                 op: "reshape",
                 shape: shape.to_vec(),
                 expected,
-                got: self.data.len(),
+                got: self.len,
             });
         }
         self.shape.clear();
@@ -112,12 +137,15 @@ impl Tensor {
     }
 
     /// Gives the tensor `shape`, keeping its allocation when that is big enough: how the ops'
-    /// `_into` forms size their output. The values afterwards are unspecified (old values or
-    /// zeros); the ops overwrite every one.
+    /// `_into` forms size their output. The values afterwards are unspecified (old values, of
+    /// this shape or an earlier one, or zeros); the ops overwrite every one.
     pub fn resize(&mut self, shape: &[usize]) {
         self.shape.clear();
         self.shape.extend_from_slice(shape);
-        self.data.resize(shape.iter().product(), 0.0);
+        self.len = shape.iter().product();
+        if self.data.len() < self.len {
+            self.data.resize(self.len, 0.0);
+        }
     }
 }
 
@@ -155,5 +183,21 @@ mod tests {
         assert_eq!((t.shape(), t.len()), (&[2, 3][..], 6));
         assert_eq!(t.data().as_ptr(), before);
         assert!(Tensor::default().is_empty());
+    }
+
+    #[test]
+    fn a_shrunk_tensor_shows_only_its_values() {
+        let mut t = Tensor::new(&[4], vec![1.0, 2.0, 3.0, 4.0]).unwrap();
+        t.resize(&[2]);
+        assert_eq!((t.len(), t.data()), (2, &[1.0, 2.0][..]));
+        assert_eq!(t, Tensor::new(&[2], vec![1.0, 2.0]).unwrap());
+        assert!(format!("{t:?}").ends_with("data: [1.0, 2.0] }"), "{t:?}");
+        assert!(
+            t.reshape(&[4]).is_err(),
+            "the old values are not the tensor's"
+        );
+        assert_eq!(t.clone().into_data(), [1.0, 2.0]);
+        t.resize(&[3]);
+        assert_eq!(t.len(), 3);
     }
 }

@@ -5,19 +5,17 @@ use std::path::Path;
 
 use crate::error::{InferError, Result};
 use crate::model::description::{Architecture, ConvSpec, GQCNN_FORMAT, GqcnnDescription};
+use crate::model::image_stream::{ImageStream, StreamBuffers};
 use crate::model::weights::Weights;
-use crate::ops::{
-    Conv2dParams, LocalResponseNorm, Pool2dParams, concat_into, conv2d_into, linear_into,
-    local_response_norm_into, max_pool2d_into, relu, softmax,
-};
+use crate::ops::{LocalResponseNorm, concat_into, linear_into, relu, softmax};
 use crate::parallel::Parallelism;
 use crate::tensor::Tensor;
 
 /// A weight matrix and its bias.
 #[derive(Debug)]
-struct Dense {
-    weight: Tensor,
-    bias: Tensor,
+pub(super) struct Dense {
+    pub(super) weight: Tensor,
+    pub(super) bias: Tensor,
 }
 
 /// A loaded GQ-CNN: `(depth crops [N, 1, S, S], pose [N, P]) -> P(robust) [N]`.
@@ -42,8 +40,7 @@ pub struct Gqcnn {
 #[derive(Debug, Default)]
 pub struct GqcnnWorkspace {
     a: Tensor,
-    b: Tensor,
-    scratch: Vec<f32>,
+    stream: Vec<StreamBuffers>,
     image: Tensor,
     pose_in: Tensor,
     pose: Tensor,
@@ -62,12 +59,39 @@ impl Gqcnn {
     /// [`InferError::Weight`] naming the weights file and tensor for missing, misshapen, extra
     /// or non-f32 tensors and truncated files.
     pub fn load(json: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(json).map_err(|e| InferError::Model {
+            detail: e.to_string(),
+            path: json.to_path_buf(),
+        })?;
+        let description = Self::parse_description(&text, json)?;
+        let weights_path = json
+            .parent()
+            .unwrap_or(Path::new("."))
+            .join(&description.weights);
+        Self::build(description, Weights::load(&weights_path)?)
+    }
+
+    /// Builds the network from a description (the JSON's text) and its safetensors file held
+    /// in memory (weights compiled into a program); `json` names the pair in errors, and the
+    /// weights are named as the file the description names beside it.
+    ///
+    /// # Errors
+    /// As [`Gqcnn::load`].
+    pub fn from_bytes(json_text: &str, weights: &[u8], json: &Path) -> Result<Self> {
+        let description = Self::parse_description(json_text, json)?;
+        let weights_path = json
+            .parent()
+            .unwrap_or(Path::new("."))
+            .join(&description.weights);
+        Self::build(description, Weights::from_bytes(weights, &weights_path)?)
+    }
+
+    fn parse_description(text: &str, json: &Path) -> Result<GqcnnDescription> {
         let model_error = |detail: String| InferError::Model {
             detail,
             path: json.to_path_buf(),
         };
-        let text = std::fs::read_to_string(json).map_err(|e| model_error(e.to_string()))?;
-        let description: GqcnnDescription = serde_json::from_str(&text)
+        let description: GqcnnDescription = serde_json::from_str(text)
             .map_err(|e| model_error(format!("not a GQ-CNN description: {e}")))?;
         if description.format != GQCNN_FORMAT {
             return Err(model_error(format!(
@@ -75,13 +99,14 @@ impl Gqcnn {
                 description.format
             )));
         }
+        check_architecture(&description.architecture).map_err(model_error)?;
+        Ok(description)
+    }
+
+    fn build(description: GqcnnDescription, mut weights: Weights) -> Result<Self> {
+        // Subnormal weights cost a microcode assist per product on x86 (see the method).
+        weights.flush_subnormals();
         let arch = &description.architecture;
-        check_architecture(arch).map_err(model_error)?;
-        let weights_path = json
-            .parent()
-            .unwrap_or(Path::new("."))
-            .join(&description.weights);
-        let mut weights = Weights::load(&weights_path)?;
         let mut convs = Vec::with_capacity(arch.convs.len());
         let (mut channels, mut size) = (1, arch.image_size_px);
         for (i, spec) in arch.convs.iter().enumerate() {
@@ -153,7 +178,9 @@ impl Gqcnn {
         })
     }
 
-    /// Runs matrix products on `parallelism` (default: one thread).
+    /// Runs on `parallelism` (default: one thread): a batch's images split among the threads
+    /// through the convolutions, a lone image's matrix products split instead, and the fully
+    /// connected layers' products split. Results are the same to the bit whatever it says.
     pub fn with_parallelism(mut self, parallelism: Parallelism) -> Self {
         self.parallelism = parallelism;
         self
@@ -199,43 +226,13 @@ impl Gqcnn {
         }
         let par = self.parallelism;
         let w = workspace;
-        w.a.resize(depth.shape());
-        for (x, &d) in w.a.data_mut().iter_mut().zip(depth.data()) {
-            *x = (d - self.image_mean) / self.image_std;
-        }
-        for (spec, layer) in &self.convs {
-            let pad = spec.kernel / 2;
-            let params = Conv2dParams {
-                padding: [pad, pad],
-                ..Conv2dParams::default()
-            };
-            conv2d_into(
-                &w.a,
-                &layer.weight,
-                Some(&layer.bias),
-                params,
-                &mut w.b,
-                &mut w.scratch,
-                par,
-            )?;
-            relu(&mut w.b);
-            std::mem::swap(&mut w.a, &mut w.b);
-            if spec.lrn {
-                local_response_norm_into(&w.a, self.lrn, &mut w.b)?;
-                std::mem::swap(&mut w.a, &mut w.b);
-            }
-            if spec.pool > 1 {
-                let p = spec.pool;
-                max_pool2d_into(
-                    &w.a,
-                    Pool2dParams::new([p, p]).with_stride([p, p]),
-                    &mut w.b,
-                )?;
-                std::mem::swap(&mut w.a, &mut w.b);
-            }
-        }
-        let features = w.a.len() / n.max(1);
-        w.a.reshape(&[n, features])?;
+        let stream = ImageStream {
+            convs: &self.convs,
+            lrn: self.lrn,
+            image_mean: self.image_mean,
+            image_std: self.image_std,
+        };
+        stream.features(depth, &mut w.a, &mut w.stream, par)?;
         linear_into(
             &w.a,
             &self.image_fc.weight,

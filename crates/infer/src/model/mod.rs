@@ -2,6 +2,7 @@
 
 pub mod description;
 pub mod gqcnn;
+mod image_stream;
 pub mod weights;
 
 pub use description::{Architecture, ConvSpec, GQCNN_FORMAT, GqcnnDescription, Normalisation};

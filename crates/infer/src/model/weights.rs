@@ -22,12 +22,23 @@ impl Weights {
     /// [`InferError::Model`] naming the file when it cannot be read or is not safetensors
     /// (truncated, corrupt header); [`InferError::Weight`] for a tensor that is not float32.
     pub fn load(path: &Path) -> Result<Self> {
+        let bytes = std::fs::read(path).map_err(|e| InferError::Model {
+            detail: format!("cannot read: {e}"),
+            path: path.to_path_buf(),
+        })?;
+        Self::from_bytes(&bytes, path)
+    }
+
+    /// Reads every tensor of a safetensors file held in memory; `path` names it in errors.
+    ///
+    /// # Errors
+    /// As [`Weights::load`].
+    pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<Self> {
         let model_error = |detail: String| InferError::Model {
             detail,
             path: path.to_path_buf(),
         };
-        let bytes = std::fs::read(path).map_err(|e| model_error(format!("cannot read: {e}")))?;
-        let file = SafeTensors::deserialize(&bytes)
+        let file = SafeTensors::deserialize(bytes)
             .map_err(|e| model_error(format!("not a safetensors file: {e}")))?;
         let mut tensors = HashMap::new();
         for (name, view) in file.tensors() {
@@ -54,6 +65,23 @@ impl Weights {
             tensors,
             path: path.to_path_buf(),
         })
+    }
+
+    /// Replaces every subnormal value (magnitude below `f32::MIN_POSITIVE`, about 1.2e-38) by
+    /// a zero of its sign. Training with weight decay leaves many such weights (a third of a
+    /// trained GQ-CNN's first fully connected layer), and on x86 each product with one that
+    /// gives a subnormal result takes a microcode assist, some hundred times a plain multiply:
+    /// a trained network ran three times slower than the same one with random weights. The
+    /// products they would add are below 1.2e-38 times an activation, invisible in any sum
+    /// that is not itself that small.
+    pub(crate) fn flush_subnormals(&mut self) {
+        for tensor in self.tensors.values_mut() {
+            for v in tensor.data_mut() {
+                if v.is_subnormal() {
+                    *v = 0.0f32.copysign(*v);
+                }
+            }
+        }
     }
 
     /// The file they came from.
@@ -89,5 +117,26 @@ impl Weights {
         let mut names: Vec<&str> = self.tensors.keys().map(String::as_str).collect();
         names.sort_unstable();
         names
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use super::*;
+
+    #[test]
+    fn subnormal_weights_are_flushed_to_signed_zeros() {
+        let values = [1e-41f32, -1e-41, f32::MIN_POSITIVE, -0.5, 0.0, 3.0e-39];
+        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let view = safetensors::tensor::TensorView::new(Dtype::F32, vec![6], &bytes).unwrap();
+        let file = safetensors::serialize([("w", view)], None).unwrap();
+        let mut weights = Weights::from_bytes(&file, Path::new("w.safetensors")).unwrap();
+        weights.flush_subnormals();
+        let w = weights.take("w", &[6]).unwrap();
+        let bits: Vec<u32> = w.data().iter().map(|v| v.to_bits()).collect();
+        let want = [0.0f32, -0.0, f32::MIN_POSITIVE, -0.5, 0.0, 0.0];
+        assert_eq!(bits, want.map(f32::to_bits));
     }
 }

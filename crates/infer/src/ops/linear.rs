@@ -133,7 +133,13 @@ mod tests {
     #[test]
     fn faer_matches_the_reference() {
         let mut rng = Rng::new(11);
-        for shape in [[1, 1, 1], [3, 17, 5], [64, 300, 33], [2, 1024, 2]] {
+        for shape in [
+            [1, 1, 1],
+            [3, 17, 5],
+            [64, 300, 33],
+            [2, 1024, 2],
+            [1, 4096, 1100],
+        ] {
             let [rows, inputs, outputs] = shape;
             let x = rng.tensor(&[rows, inputs]);
             let w = rng.tensor(&[outputs, inputs]);
@@ -150,8 +156,14 @@ mod tests {
     #[test]
     fn the_thread_count_does_not_change_a_bit() {
         let mut rng = Rng::new(14);
-        // One row (faer's matrix-vector path), one output, and a batch.
-        for [rows, inputs, outputs] in [[1, 1024, 512], [300, 700, 1], [96, 512, 256]] {
+        // One row (faer's matrix-vector path, in blocks of outputs; large enough for threads
+        // in the second, with a last block cut short), one output, and a batch.
+        for [rows, inputs, outputs] in [
+            [1, 1024, 512],
+            [1, 4096, 1100],
+            [300, 700, 1],
+            [96, 512, 256],
+        ] {
             let x = rng.tensor(&[rows, inputs]);
             let w = rng.tensor(&[outputs, inputs]);
             let b = rng.tensor(&[outputs]);

@@ -54,6 +54,34 @@ impl LocalResponseNorm {
     fn normalise(&self, x: f32, sum_of_squares: f32) -> f32 {
         x / (self.k + self.alpha * (sum_of_squares / self.size as f32)).powf(self.beta)
     }
+
+    /// [`Self::normalise`] over a plane: `sums` holds each value's sum of squares on entry and
+    /// the output on return. The usual exponents (0.75: torch's default and Dex-Net's; 0.5; 1)
+    /// are square roots and divisions, which vectorise; others call `powf` per value (a
+    /// library call: it made LRN four fifths of a small GQ-CNN's time).
+    fn normalise_plane(&self, x: &[f32], sums: &mut [f32]) {
+        let (k, alpha, size) = (self.k, self.alpha, self.size as f32);
+        let base = |s: f32| k + alpha * (s / size);
+        let pairs = sums.iter_mut().zip(x);
+        if self.beta == 0.75 {
+            for (s, &v) in pairs {
+                let root = base(*s).sqrt();
+                *s = v / (root * root.sqrt());
+            }
+        } else if self.beta == 0.5 {
+            for (s, &v) in pairs {
+                *s = v / base(*s).sqrt();
+            }
+        } else if self.beta == 1.0 {
+            for (s, &v) in pairs {
+                *s = v / base(*s);
+            }
+        } else {
+            for (s, &v) in pairs {
+                *s = self.normalise(v, *s);
+            }
+        }
+    }
 }
 
 /// Local response normalisation of an `[N, C, ...]` tensor into a new one of its shape.
@@ -93,9 +121,7 @@ pub fn local_response_norm_into(
                     *s += v * v;
                 }
             }
-            for (s, &v) in y_plane.iter_mut().zip(&x[c * plane..(c + 1) * plane]) {
-                *s = params.normalise(v, *s);
-            }
+            params.normalise_plane(&x[c * plane..(c + 1) * plane], y_plane);
         }
     }
     Ok(())
@@ -177,14 +203,17 @@ mod tests {
             (vec![1, 2, 3, 3], 8),
         ] {
             let x = rng.tensor_in(&shape, -3.0, 3.0);
-            let params = LocalResponseNorm {
-                size,
-                alpha: 0.5,
-                beta: 0.75,
-                k: 1.5,
-            };
-            let fast = local_response_norm(&x, params).unwrap();
-            assert_close(&fast, &local_response_norm_reference(&x, params).unwrap());
+            // The exponents with a fast path, and one without.
+            for beta in [0.75, 0.5, 1.0, 0.6] {
+                let params = LocalResponseNorm {
+                    size,
+                    alpha: 0.5,
+                    beta,
+                    k: 1.5,
+                };
+                let fast = local_response_norm(&x, params).unwrap();
+                assert_close(&fast, &local_response_norm_reference(&x, params).unwrap());
+            }
         }
     }
 

@@ -1,12 +1,15 @@
 //! The fast convolution: each image is unfolded into a `[C * kh * kw, oh * ow]` column matrix
 //! (im2col), and one faer product with the weight, read as `[out_C, C * kh * kw]`, writes the
-//! image's `[out_C, oh * ow]` output in place.
+//! image's `[out_C, oh * ow]` output in place. Where the column matrix would outgrow a core's
+//! cache, it is made and multiplied a band of output rows at a time.
+
+use std::ops::Range;
 
 use rayon::prelude::*;
 
 use super::geometry::{Conv2dParams, Geometry};
 use crate::error::Result;
-use crate::gemm::{Rhs, matmul};
+use crate::gemm::{Rhs, matmul, matmul_rows};
 use crate::parallel::Parallelism;
 use crate::tensor::Tensor;
 
@@ -56,7 +59,7 @@ pub fn conv2d_into(
     let col_len = if is_pointwise(&g) {
         0
     } else {
-        g.c * g.kh * g.kw * g.oh * g.ow
+        g.c * g.kh * g.kw * band_rows(&g) * g.ow
     };
     let (x, k, y) = (input.data(), weight.data(), out.data_mut());
     if g.n == 0 || out_len == 0 {
@@ -66,22 +69,22 @@ pub fn conv2d_into(
     let input_image = |i: usize| &x[i * in_len..(i + 1) * in_len];
     if tasks <= 1 {
         // One image at a time; a lone image (or a single-thread run) lets faer split the product.
-        scratch.resize(col_len, 0.0);
+        let col = stretch(scratch, col_len);
         for (i, yi) in y.chunks_exact_mut(out_len).enumerate() {
-            image(&g, input_image(i), k, bias, yi, scratch, par)?;
+            image(&g, input_image(i), k, bias, yi, col, par)?;
         }
         return Ok(());
     }
-    // A batch: `tasks` contiguous runs of images, each with its own stretch of `scratch`.
+    // A batch: `tasks` contiguous runs of images, each with its own stretch of `scratch`
+    // (chunks of at least one value, so that every task gets one when no columns are needed).
     let per_task = g.n.div_ceil(tasks);
     let tasks = g.n.div_ceil(per_task);
-    scratch.resize(tasks * col_len, 0.0);
-    let mut cols: Vec<&mut [f32]> = scratch.chunks_exact_mut(col_len.max(1)).collect();
-    cols.resize_with(tasks, Default::default);
+    let cols = stretch(scratch, tasks * col_len.max(1));
     y.par_chunks_mut(per_task * out_len)
-        .zip(cols)
+        .zip(cols.par_chunks_mut(col_len.max(1)))
         .enumerate()
         .try_for_each(|(t, (ys, col))| {
+            let col = &mut col[..col_len];
             for (j, yi) in ys.chunks_exact_mut(out_len).enumerate() {
                 let xi = input_image(t * per_task + j);
                 image(&g, xi, k, bias, yi, col, Parallelism::Sequential)?;
@@ -90,14 +93,36 @@ pub fn conv2d_into(
         })
 }
 
+/// The first `len` values of `scratch`, which grows to hold them but never shrinks: a buffer
+/// shared by layers of different sizes would otherwise be zero-filled again each time it grew
+/// (megabytes an image, for Dex-Net's second convolution).
+fn stretch(scratch: &mut Vec<f32>, len: usize) -> &mut [f32] {
+    if scratch.len() < len {
+        scratch.resize(len, 0.0);
+    }
+    &mut scratch[..len]
+}
+
 /// Whether the convolution reads each input value once per output position unchanged (a 1x1
 /// kernel, stride 1, no padding): then the input image already is the column matrix.
 fn is_pointwise(g: &Geometry) -> bool {
     g.kh == 1 && g.kw == 1 && g.stride == [1, 1] && g.padding == [0, 0]
 }
 
+/// The most values of a band's column matrix: 1 MiB, half a core's L2 cache on the machines
+/// the benchmarks ran on, so that the product reads its columns from there.
+const BAND_VALUES: usize = 1 << 18;
+
+/// The output rows unfolded and multiplied at a time: all of them unless that outgrows
+/// [`BAND_VALUES`] (Dex-Net's second convolution, 6.5 MB of columns, goes in bands of 5 rows
+/// of 32). Fixed by the geometry alone, so every value is the same whatever the threads.
+fn band_rows(g: &Geometry) -> usize {
+    let per_row = g.c * g.kh * g.kw * g.ow;
+    (BAND_VALUES / per_row.max(1)).clamp(1, g.oh.max(1))
+}
+
 /// One image: `y [oc, oh * ow] = weight [oc, c * kh * kw] · columns [c * kh * kw, oh * ow]`
-/// (+ bias).
+/// (+ bias), the columns made and multiplied a band of output rows at a time.
 fn image(
     g: &Geometry,
     x: &[f32],
@@ -113,31 +138,56 @@ fn image(
             row.fill(b);
         }
     }
-    let columns: &[f32] = if is_pointwise(g) {
-        x
-    } else {
-        unfold(g, x, col);
-        col
-    };
-    matmul(
-        "conv2d",
-        y,
-        weight,
-        columns,
-        [g.oc, g.c * g.kh * g.kw, positions],
-        Rhs::RowMajor,
-        bias.is_some(),
-        par,
-    )
+    let taps = g.c * g.kh * g.kw;
+    if is_pointwise(g) {
+        let shape = [g.oc, taps, positions];
+        return matmul(
+            "conv2d",
+            y,
+            weight,
+            x,
+            shape,
+            Rhs::RowMajor,
+            bias.is_some(),
+            par,
+        );
+    }
+    let band = band_rows(g);
+    for start in (0..g.oh).step_by(band) {
+        let rows = start..(start + band).min(g.oh);
+        let n = rows.len() * g.ow;
+        let col = &mut col[..taps * n];
+        if is_same_width(g) {
+            unfold_same_width(g, x, col, rows);
+        } else {
+            unfold(g, x, col, rows);
+        }
+        // Output rows start.. of every channel: a block of columns of y [oc, positions].
+        let dst = &mut y[start * g.ow..];
+        let shape = [g.oc, taps, n];
+        let accumulate = bias.is_some();
+        matmul_rows(
+            "conv2d",
+            dst,
+            positions,
+            weight,
+            col,
+            shape,
+            Rhs::RowMajor,
+            accumulate,
+            par,
+        )?;
+    }
+    Ok(())
 }
 
-/// im2col: row `(c, ky, kx)` of `col` holds, for every output position, the input value that
-/// kernel tap meets there (zero in the padding).
-fn unfold(g: &Geometry, x: &[f32], col: &mut [f32]) {
+/// im2col of output rows `band`: row `(c, ky, kx)` of `col` holds, for every output position
+/// of the band, the input value that kernel tap meets there (zero in the padding).
+fn unfold(g: &Geometry, x: &[f32], col: &mut [f32], band: Range<usize>) {
     let [sh, sw] = g.stride;
     let [ph, pw] = g.padding;
     let [dh, dw] = g.dilation;
-    let positions = g.oh * g.ow;
+    let positions = band.len() * g.ow;
     let mut rows = col.chunks_exact_mut(positions);
     for c in 0..g.c {
         let plane = &x[c * g.h * g.w..(c + 1) * g.h * g.w];
@@ -145,7 +195,7 @@ fn unfold(g: &Geometry, x: &[f32], col: &mut [f32]) {
             for kx in 0..g.kw {
                 let Some(row) = rows.next() else { return };
                 let (lo, hi) = valid_outputs(g.w, g.ow, sw, pw, kx * dw);
-                for (oy, out_row) in row.chunks_exact_mut(g.ow).enumerate() {
+                for (oy, out_row) in band.clone().zip(row.chunks_exact_mut(g.ow)) {
                     let iy = (oy * sh + ky * dh).checked_sub(ph).filter(|&iy| iy < g.h);
                     let Some(iy) = iy else {
                         out_row.fill(0.0);
@@ -175,6 +225,56 @@ fn unfold(g: &Geometry, x: &[f32], col: &mut [f32]) {
     }
 }
 
+/// Whether the convolution has stride 1, no dilation and an output as wide as its input (a
+/// "same" width: `kw = 2 * pw + 1`), the case [`unfold_same_width`] handles.
+fn is_same_width(g: &Geometry) -> bool {
+    g.stride == [1, 1] && g.dilation == [1, 1] && g.ow == g.w
+}
+
+/// [`unfold`] for [`is_same_width`] convolutions. Output position `p = oy * w + ox` of row
+/// `(c, ky, kx)` then reads input value `p + (ky - ph) * w + kx - pw` of plane `c`: the row is
+/// the plane shifted, one copy, after which only the output rows off the input and the
+/// `|kx - pw|` columns of each row that the shift wraps round from a neighbouring input row are
+/// zeroed. The values are those [`unfold`] writes; small images make many short rows, where a
+/// copy per output row costs more than the copying.
+fn unfold_same_width(g: &Geometry, x: &[f32], col: &mut [f32], band: Range<usize>) {
+    let (h, w) = (g.h, g.w);
+    let [ph, pw] = g.padding;
+    // Positions are global (p = oy * w + ox); the band's start at `base` of each row of col.
+    let base = band.start * w;
+    let mut rows = col.chunks_exact_mut(band.len() * w);
+    for plane in x.chunks_exact(h * w).take(g.c) {
+        for ky in 0..g.kh {
+            // Output rows top..bottom of the band read input rows oy + ky - ph inside 0..h.
+            let top = ph.saturating_sub(ky).clamp(band.start, band.end);
+            let bottom = (h + ph).saturating_sub(ky).clamp(top, band.end);
+            for kx in 0..g.kw {
+                let Some(row) = rows.next() else { return };
+                row[..top * w - base].fill(0.0);
+                row[bottom * w - base..].fill(0.0);
+                let (lo, hi) = valid_outputs(w, g.ow, 1, pw, kx);
+                // Input index = p + shift; positions whose index falls off the plane are in the
+                // wrapped columns, zeroed below.
+                let shift = (ky as isize - ph as isize) * w as isize + kx as isize - pw as isize;
+                let first = (top * w).max((-shift).max(0) as usize);
+                let last = (bottom * w).min(((h * w) as isize - shift).max(0) as usize);
+                if first < last {
+                    let from = (first as isize + shift) as usize;
+                    let to = &mut row[first - base..last - base];
+                    to.copy_from_slice(&plane[from..from + (last - first)]);
+                }
+                // Column by column (a few values a row), so that no call is made per row.
+                let inside = &mut row[top * w - base..bottom * w - base];
+                for ox in (0..lo).chain(hi..w) {
+                    for v in inside.iter_mut().skip(ox).step_by(w) {
+                        *v = 0.0;
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// The output columns `lo..hi` whose input column `ox * stride + offset - padding` lies in
 /// `0..width`.
 fn valid_outputs(
@@ -196,4 +296,48 @@ fn valid_outputs(
         0
     };
     (lo, hi.max(lo))
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use super::*;
+    use crate::testing::Rng;
+
+    #[test]
+    fn same_width_columns_are_the_general_ones() {
+        let mut rng = Rng::new(9);
+        // [c, h, w], kernel [kh, kw], padding [ph, pw] with kw = 2 pw + 1; taller and shorter
+        // outputs, and kernels wider than the image.
+        for ([c, h, w], [kh, kw], [ph, pw]) in [
+            ([1, 32, 32], [5, 5], [2, 2]),
+            ([3, 8, 8], [3, 3], [1, 1]),
+            ([2, 6, 5], [5, 3], [1, 1]),
+            ([2, 4, 6], [3, 3], [2, 1]),
+            ([1, 2, 2], [7, 7], [3, 3]),
+            ([2, 1, 3], [1, 1], [0, 0]),
+        ] {
+            let input = rng.tensor(&[1, c, h, w]);
+            let weight = Tensor::zeros(&[1, c, kh, kw]);
+            let params = Conv2dParams {
+                padding: [ph, pw],
+                ..Conv2dParams::default()
+            };
+            let (g, _) = Geometry::new(&input, &weight, None, params).unwrap();
+            assert!(is_same_width(&g));
+            // The whole image, and bands of one and of three output rows.
+            for band in [g.oh, 1, 3] {
+                for start in (0..g.oh).step_by(band) {
+                    let rows = start..(start + band).min(g.oh);
+                    let len = c * kh * kw * rows.len() * g.ow;
+                    let (mut fast, mut general) = (vec![f32::NAN; len], vec![f32::NAN; len]);
+                    unfold_same_width(&g, input.data(), &mut fast, rows.clone());
+                    unfold(&g, input.data(), &mut general, rows.clone());
+                    let case = format!("{c}x{h}x{w} kernel {kh}x{kw} padding {ph},{pw} {rows:?}");
+                    assert_eq!(fast, general, "{case}");
+                }
+            }
+        }
+    }
 }

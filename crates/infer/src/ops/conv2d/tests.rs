@@ -241,3 +241,29 @@ fn bad_shapes_and_parameters_are_errors() {
     assert!(conv2d(&x, &Tensor::zeros(&[2, 3, 0, 3]), None, p, seq).is_err());
     assert!(conv2d_reference(&x, &Tensor::zeros(&[2, 3, 6, 3]), None, p).is_err());
 }
+
+#[test]
+fn large_images_go_in_bands_that_match_the_reference() {
+    let mut rng = Rng::new(8);
+    // Column matrices of 4.8 and 1.3 MB: two bands each, a "same" convolution and a strided one.
+    for (input, oc, stride, padding) in [
+        ([2, 40, 12, 40], 8, [1, 1], [2, 2]),
+        ([1, 30, 40, 60], 3, [2, 2], [1, 1]),
+    ] {
+        let x = rng.tensor(&input);
+        let w = rng.tensor(&[oc, input[1], 5, 5]);
+        let b = rng.tensor(&[oc]);
+        let params = Conv2dParams {
+            stride,
+            padding,
+            ..Conv2dParams::default()
+        };
+        let want = conv2d_reference(&x, &w, Some(&b), params).unwrap();
+        let one = conv2d(&x, &w, Some(&b), params, Parallelism::Sequential).unwrap();
+        assert_close(&one, &want);
+        for par in PARS {
+            let got = conv2d(&x, &w, Some(&b), params, par).unwrap();
+            assert_same_bits(&got, &one, &format!("{input:?} {par:?}"));
+        }
+    }
+}

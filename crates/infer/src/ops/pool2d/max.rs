@@ -26,7 +26,12 @@ pub fn max_pool2d_into(input: &Tensor, params: Pool2dParams, out: &mut Tensor) -
     let g = Geometry::new("max_pool2d", input, params)?;
     out.resize(&g.output_shape());
     let planes = input.data().chunks_exact(g.h * g.w);
+    let two_by_two = Pool2dParams::new([2, 2]);
     for (plane, out_plane) in planes.zip(out.data_mut().chunks_exact_mut(g.oh * g.ow)) {
+        if params == two_by_two {
+            pool_2x2(plane, g.w, out_plane, g.ow);
+            continue;
+        }
         let mut y = out_plane.iter_mut();
         for oy in 0..g.oh {
             let rows = g.span(0, oy);
@@ -35,9 +40,7 @@ pub fn max_pool2d_into(input: &Tensor, params: Pool2dParams, out: &mut Tensor) -
                 let mut m = f32::NEG_INFINITY;
                 for iy in rows.clone() {
                     for &v in &plane[iy * g.w + cols.start..iy * g.w + cols.end] {
-                        if v > m || v.is_nan() {
-                            m = v;
-                        }
+                        m = larger(m, v);
                     }
                 }
                 if let Some(y) = y.next() {
@@ -47,4 +50,23 @@ pub fn max_pool2d_into(input: &Tensor, params: Pool2dParams, out: &mut Tensor) -
         }
     }
     Ok(())
+}
+
+/// The running maximum `m` after `v`: `v` when larger or NaN (torch's rule), without a branch.
+#[inline]
+fn larger(m: f32, v: f32) -> f32 {
+    if v > m || v.is_nan() { v } else { m }
+}
+
+/// The 2x2 window with stride 2 and no padding (the GQ-CNN's): each output the fold of
+/// [`larger`] over its window in row-major order, as the general loop computes it.
+fn pool_2x2(plane: &[f32], w: usize, out: &mut [f32], ow: usize) {
+    for (rows, y) in plane.chunks_exact(2 * w).zip(out.chunks_exact_mut(ow)) {
+        let (top, bottom) = rows.split_at(w);
+        let pairs = top.chunks_exact(2).zip(bottom.chunks_exact(2));
+        for (y, (t, b)) in y.iter_mut().zip(pairs) {
+            // larger(-inf, t[0]) is t[0] itself, so the fold starts there.
+            *y = larger(larger(larger(t[0], t[1]), b[0]), b[1]);
+        }
+    }
 }

@@ -83,6 +83,31 @@ fn clipped_windows_match_the_padded_reference() {
 }
 
 #[test]
+fn the_2x2_fast_path_is_the_reference_to_the_bit() {
+    // Even and odd sides (floor mode drops the last row or column), NaNs and ties included.
+    let mut rng = Rng::new(6);
+    for [h, w] in [[4, 4], [5, 7], [2, 3], [16, 16]] {
+        let mut x = rng.tensor(&[2, 3, h, w]);
+        for (i, v) in x.data_mut().iter_mut().enumerate() {
+            match i % 11 {
+                3 => *v = f32::NAN,
+                7 => *v = 0.0,
+                8 => *v = -0.0,
+                _ => {}
+            }
+        }
+        let p = Pool2dParams::new([2, 2]);
+        let (fast, slow) = (
+            max_pool2d(&x, p).unwrap(),
+            max_pool2d_reference(&x, p).unwrap(),
+        );
+        assert_eq!(fast.shape(), slow.shape());
+        let bits = |t: &Tensor| t.data().iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&fast), bits(&slow), "{h}x{w}");
+    }
+}
+
+#[test]
 fn output_buffers_are_overwritten() {
     let mut out = Tensor::full(&[3, 3], f32::NAN);
     max_pool2d_into(&grid(), Pool2dParams::new([2, 2]), &mut out).unwrap();

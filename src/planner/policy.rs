@@ -1,0 +1,180 @@
+//! Grasp planning with a GQ-CNN: candidates from each view's depth image, scored by the
+//! network, lifted to the world, best first (the seed paper's multi-view policy; with one
+//! top-down view, Dex-Net 2.0's).
+
+use mvgrasp_geometry::Camera;
+use mvgrasp_grasp::{Grasp, ImageGrasp};
+use mvgrasp_infer::{Gqcnn, GqcnnWorkspace, Tensor};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::sampler::{ImageSamplerParams, sample_image_grasps};
+use crate::dataset::splitmix;
+use crate::error::Result;
+use crate::grasp_dataset::CropParams;
+use crate::grasp_dataset::cameras::theta_rad;
+use crate::grasp_dataset::crop::crop_depth;
+
+/// One view the planner looks through: the camera and its depth image (row-major, metres,
+/// 0 = nothing, the camera's width x height).
+#[derive(Clone, Copy, Debug)]
+pub struct View<'a> {
+    /// Pose and intrinsics.
+    pub camera: &'a Camera,
+    /// Depth along the optical axis, metres.
+    pub depth_m: &'a [f32],
+}
+
+/// A candidate with the network's score.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct ScoredGrasp {
+    /// The view it was found in.
+    pub view: usize,
+    /// The grasp in that view's image.
+    pub image: ImageGrasp,
+    /// The grasp in the world.
+    pub grasp: Grasp,
+    /// The view's angle to the table plane (the multi-view GQ-CNN's theta), radians.
+    pub theta_rad: f32,
+    /// The network's probability that the grasp is robust.
+    pub quality: f32,
+}
+
+/// What the planner found in each view and overall.
+#[derive(Clone, Debug, Serialize)]
+pub struct Plan {
+    /// Every scored candidate of every view, best first (ties: lower view, then sampling
+    /// order).
+    pub candidates: Vec<ScoredGrasp>,
+    /// Candidates per view.
+    pub candidates_per_view: Vec<usize>,
+}
+
+impl Plan {
+    /// The best grasp, if any view had a candidate.
+    pub fn best(&self) -> Option<&ScoredGrasp> {
+        self.candidates.first()
+    }
+
+    /// The best grasp found in `view`.
+    pub fn best_in_view(&self, view: usize) -> Option<&ScoredGrasp> {
+        self.candidates.iter().find(|c| c.view == view)
+    }
+}
+
+/// A GQ-CNN and how candidates are made for it.
+#[derive(Debug)]
+pub struct GqcnnPolicy {
+    net: Gqcnn,
+    /// The depth-image sampler's parameters.
+    pub sampler: ImageSamplerParams,
+    /// The crops the network was trained on (the grasp dataset's).
+    pub crop: CropParams,
+    /// The gripper's widest opening, metres.
+    pub max_width_m: f32,
+    /// Crops scored per network call.
+    pub batch: usize,
+}
+
+impl GqcnnPolicy {
+    /// A policy with the default sampler and crops, for a gripper opening `max_width_m`.
+    ///
+    /// # Errors
+    /// A network whose crops are not the grasp dataset's size, or whose pose stream takes
+    /// something other than the grasp depth (1 input) or the depth and theta (2).
+    pub fn new(net: Gqcnn, max_width_m: f32) -> Result<Self> {
+        let crop = CropParams::default();
+        let arch = net.architecture();
+        if arch.image_size_px != crop.size_px as usize || !(1..=2).contains(&arch.pose_inputs) {
+            return Err(crate::Error::Dataset {
+                detail: format!(
+                    "the network takes {0} x {0} crops and {1} pose inputs; the planner makes \
+                     {2} x {2} crops and 1 (depth) or 2 (depth, theta) pose inputs",
+                    arch.image_size_px, arch.pose_inputs, crop.size_px
+                ),
+            });
+        }
+        Ok(Self {
+            net,
+            sampler: ImageSamplerParams::default(),
+            crop,
+            max_width_m,
+            batch: 256,
+        })
+    }
+
+    /// The network.
+    pub fn net(&self) -> &Gqcnn {
+        &self.net
+    }
+
+    /// Plans in every view (in parallel) and ranks all candidates together; deterministic
+    /// from `seed` whatever the thread count.
+    ///
+    /// # Errors
+    /// A view whose depth image does not have its camera's size, or a network error.
+    pub fn plan(&self, views: &[View<'_>], seed: u64) -> Result<Plan> {
+        let per_view = views
+            .par_iter()
+            .enumerate()
+            .map(|(i, view)| self.score_view(i, view, splitmix(seed ^ i as u64)))
+            .collect::<Result<Vec<_>>>()?;
+        let candidates_per_view = per_view.iter().map(Vec::len).collect();
+        let mut candidates: Vec<ScoredGrasp> = per_view.into_iter().flatten().collect();
+        // A stable sort: equal scores keep view order, then sampling order.
+        candidates.sort_by(|a, b| b.quality.total_cmp(&a.quality));
+        Ok(Plan {
+            candidates,
+            candidates_per_view,
+        })
+    }
+
+    /// The scored candidates of one view, in sampling order.
+    fn score_view(&self, index: usize, view: &View<'_>, seed: u64) -> Result<Vec<ScoredGrasp>> {
+        let k = &view.camera.intrinsics;
+        let (w, h) = (k.width, k.height);
+        if view.depth_m.len() != w as usize * h as usize {
+            return Err(crate::Error::Dataset {
+                detail: format!(
+                    "view {index}: the depth image has {} pixels, the camera {w} x {h}",
+                    view.depth_m.len()
+                ),
+            });
+        }
+        let grasps = sample_image_grasps(view.depth_m, k, self.max_width_m, &self.sampler, seed);
+        let theta = theta_rad(view.camera);
+        let pose_inputs = self.net.architecture().pose_inputs;
+        let side = self.crop.size_px as usize;
+        let mut workspace = GqcnnWorkspace::default();
+        let mut scored = Vec::with_capacity(grasps.len());
+        for chunk in grasps.chunks(self.batch.max(1)) {
+            let mut crops = Vec::with_capacity(chunk.len() * side * side);
+            let mut poses = Vec::with_capacity(chunk.len() * pose_inputs);
+            for g in chunk {
+                crops.extend(crop_depth(
+                    view.depth_m,
+                    w,
+                    h,
+                    g.center_px,
+                    g.angle_rad,
+                    &self.crop,
+                ));
+                poses.push(g.depth_m);
+                if pose_inputs == 2 {
+                    poses.push(theta);
+                }
+            }
+            let depth = Tensor::new(&[chunk.len(), 1, side, side], crops)?;
+            let pose = Tensor::new(&[chunk.len(), pose_inputs], poses)?;
+            let quality = self.net.predict(&depth, &pose, &mut workspace)?;
+            scored.extend(chunk.iter().zip(quality).map(|(g, q)| ScoredGrasp {
+                view: index,
+                image: *g,
+                grasp: g.to_world(view.camera),
+                theta_rad: theta,
+                quality: q,
+            }));
+        }
+        Ok(scored)
+    }
+}
