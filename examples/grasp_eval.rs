@@ -7,6 +7,9 @@
 //!
 //! Meshes missing from the data folder are skipped with a note.
 
+mod common;
+
+use common::REAL_MESHES;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -16,22 +19,6 @@ use mvgrasp::geometry::{StablePoseParams, load_mesh, stable_poses};
 use mvgrasp::grasp::physics::{PhysicsParams, StageCounts};
 use mvgrasp::grasp::{AnalysisConfig, GraspObject, Gripper, analyse};
 use serde::Serialize;
-
-/// The real meshes of the evaluation (paths under the data folder; all in metres).
-const MESHES: [&str; 12] = [
-    "ycb/meshes/003_cracker_box_textured.obj",
-    "ycb/meshes/004_sugar_box_textured.obj",
-    "ycb/meshes/005_tomato_soup_can_textured.obj",
-    "ycb/meshes/006_mustard_bottle_textured.obj",
-    "ycb/meshes/009_gelatin_box_textured.obj",
-    "ycb/meshes/010_potted_meat_can_textured.obj",
-    "dexnet/test/models/bar_clamp.obj",
-    "dexnet/meshes/example/box.obj",
-    "robosuite/objects/meshes/bottle.obj",
-    "robosuite/objects/meshes/can.stl",
-    "robosuite/objects/meshes/milk.stl",
-    "pybullet/objects/mug.urdf",
-];
 
 /// Evaluate robust labels against physics on real meshes.
 #[derive(Parser, Debug)]
@@ -85,7 +72,7 @@ fn run(args: &Args) -> Result<(), String> {
         "| object | pose | tries | grasps | robust + | +held | +failed | -held | -failed | agreement | failures (settle/approach/close/lift/shake) | s |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
-    for relative in MESHES {
+    for relative in REAL_MESHES {
         let path = args.data.join(relative);
         if !path.exists() {
             eprintln!("skipping {} (not found)", path.display());

@@ -173,23 +173,15 @@ fn candidates_are_lifted_along_their_views() {
 /// `training/scripts/make_parity_fixtures.py`) within 1e-4.
 #[test]
 fn the_shipped_networks_match_torch_within_1e_4() {
-    use mvgrasp::infer::{GqcnnWorkspace, Tensor};
+    use mvgrasp::infer::GqcnnWorkspace;
+    use mvgrasp::infer::model::Weights;
     for model in models::ALL {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!(
             "tests/fixtures/shipped/{}.io.safetensors",
             model.name
         ));
-        let bytes = std::fs::read(&path).unwrap();
-        let file = safetensors::SafeTensors::deserialize(&bytes).unwrap();
-        let tensor = |name: &str| {
-            let view = file.tensor(name).unwrap();
-            let data = view
-                .data()
-                .chunks_exact(4)
-                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-                .collect();
-            Tensor::new(view.shape(), data).unwrap()
-        };
+        let mut io = Weights::load(&path).unwrap();
+        let mut tensor = |name: &str| io.take_any(name).unwrap();
         let net = model.load().unwrap();
         let mut workspace = GqcnnWorkspace::default();
         let logits = net

@@ -5,25 +5,16 @@
 
 use std::path::{Path, PathBuf};
 
+use mvgrasp_infer::model::Weights;
 use mvgrasp_infer::{Gqcnn, GqcnnWorkspace, InferError, Parallelism, Tensor};
-use safetensors::SafeTensors;
 
 fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures")
 }
 
 fn io(name: &str) -> (Tensor, Tensor, Vec<f32>) {
-    let bytes = std::fs::read(fixtures().join(format!("{name}.io.safetensors"))).unwrap();
-    let file = SafeTensors::deserialize(&bytes).unwrap();
-    let tensor = |n: &str| {
-        let view = file.tensor(n).unwrap();
-        let data = view
-            .data()
-            .chunks_exact(4)
-            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-            .collect();
-        Tensor::new(view.shape(), data).unwrap()
-    };
+    let mut file = Weights::load(&fixtures().join(format!("{name}.io.safetensors"))).unwrap();
+    let mut tensor = |n: &str| file.take_any(n).unwrap();
     (
         tensor("depth"),
         tensor("pose"),

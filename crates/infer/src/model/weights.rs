@@ -89,6 +89,19 @@ impl Weights {
         &self.path
     }
 
+    /// Takes the tensor `name`, whatever its shape (inputs and outputs stored beside weights,
+    /// as the parity fixtures do).
+    ///
+    /// # Errors
+    /// [`InferError::Weight`] naming the tensor when it is missing.
+    pub fn take_any(&mut self, name: &str) -> Result<Tensor> {
+        self.tensors.remove(name).ok_or_else(|| InferError::Weight {
+            name: name.to_string(),
+            detail: "missing".into(),
+            path: self.path.clone(),
+        })
+    }
+
     /// Takes the tensor `name`, which must have `shape`.
     ///
     /// # Errors
