@@ -7,21 +7,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conftest import generate_grasp_dataset
 from mvgrasp_training.grasp_shards import GraspDataset, ShardError, read_shard
 
 
 @pytest.fixture(scope="module")
 def dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    grasp_dataset = pytest.importorskip("mvgrasp.grasp_dataset")
-    root = tmp_path_factory.mktemp("grasps")
-    config = root / "small.toml"
-    config.write_text(
+    return generate_grasp_dataset(
+        tmp_path_factory.mktemp("grasps"),
         "stable_poses_per_object = 1\ngrasps_per_pose = 16\nviews_per_pose = 2\n"
-        "objects_per_shard = 1\nphysics_fraction = 0.1\n"
+        "objects_per_shard = 1\nphysics_fraction = 0.1\n",
+        ["box", "can"],
     )
-    out = root / "out"
-    grasp_dataset.generate(out, config, categories=["box", "can"])
-    return out
 
 
 def test_shards_read_with_the_counts_of_the_manifest(dataset: Path) -> None:

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 torch = pytest.importorskip("torch")
-pytest.importorskip("mvgrasp.grasp_dataset")
 
+from conftest import generate_grasp_dataset  # noqa: E402
 from mvgrasp_training.config import parse_config  # noqa: E402
 from mvgrasp_training.gqcnn import GQCNN, small  # noqa: E402
 from mvgrasp_training.train import train  # noqa: E402
@@ -21,27 +21,12 @@ from mvgrasp_training.train import train  # noqa: E402
 @pytest.fixture(scope="module")
 def dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A small grasp dataset of four built-in objects, made by the wheel."""
-    root = tmp_path_factory.mktemp("grasps")
-    config_toml = root / "small.toml"
-    config_toml.write_text(
+    return generate_grasp_dataset(
+        tmp_path_factory.mktemp("grasps"),
         "stable_poses_per_object = 1\ngrasps_per_pose = 24\nviews_per_pose = 3\n"
-        "objects_per_shard = 2\nphysics_fraction = 0.0\n"
+        "objects_per_shard = 2\nphysics_fraction = 0.0\n",
+        ["box", "can", "mug", "bottle"],
     )
-    data = root / "data"
-    # In its own process: the renderer's Mesa LLVM and the LLVM in torch's triton, loaded into
-    # one process, crash it.
-    subprocess.run(
-        [
-            sys.executable,
-            "-c",
-            "import sys, mvgrasp.grasp_dataset as g; "
-            "g.generate(sys.argv[1], sys.argv[2], categories=['box', 'can', 'mug', 'bottle'])",
-            str(data),
-            str(config_toml),
-        ],
-        check=True,
-    )
-    return data
 
 
 def test_a_short_run_trains_resumes_and_exports(dataset: Path, tmp_path: Path) -> None:

@@ -1,0 +1,37 @@
+"""What the training tests share."""
+
+from __future__ import annotations
+
+import importlib.util
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+
+def generate_grasp_dataset(root: Path, config_toml: str, categories: list[str]) -> Path:
+    """A grasp dataset of built-in objects made by the mvgrasp wheel into ``root/data``
+    (skips the test when the wheel is not installed).
+
+    In its own process: Mesa's LLVM (the renderer) and the LLVM inside torch's triton, loaded
+    into one process, crash it, and pytest runs every test module in one process.
+    """
+    if importlib.util.find_spec("mvgrasp") is None:
+        pytest.skip("the mvgrasp wheel is not installed")
+    config = root / "config.toml"
+    config.write_text(config_toml)
+    data = root / "data"
+    subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            "import sys, mvgrasp.grasp_dataset as g; "
+            "g.generate(sys.argv[1], sys.argv[2], categories=sys.argv[3].split(','))",
+            str(data),
+            str(config),
+            ",".join(categories),
+        ],
+        check=True,
+    )
+    return data
