@@ -92,6 +92,7 @@ fn plan_reports_bad_input_in_one_line_and_exits_2() {
         &["--model", "no_such_network"][..],
         &["--model", "/nonexistent/net.json"][..],
         &["--views", "0"][..],
+        &["--views", "11"][..],
         &["--distance-m", "0"][..],
     ] {
         let out = plan(args);

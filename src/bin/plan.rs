@@ -89,6 +89,13 @@ fn run(args: &Args) -> Result<(), String> {
     .map_err(|e| e.to_string())?;
     let (model_name, net) = load_model(&args.model)?;
     let setting = ViewSetting::for_pose_inputs(net.architecture().pose_inputs);
+    let layout = PlanParams::default().views;
+    if args.views.is_some_and(|v| v > layout.count) {
+        return Err(format!(
+            "--views: at most {} (the test views)",
+            layout.count
+        ));
+    }
     let mut params = PlanParams {
         max_views: args.views.unwrap_or(setting.views),
         intrinsics,

@@ -147,7 +147,7 @@ pub fn plan_grasp(
     };
     let &pose_index = candidates
         .get(params.stable_pose)
-        .ok_or_else(|| Error::Dataset {
+        .ok_or_else(|| Error::Planner {
             detail: format!(
                 "stable pose {} asked for, the object has {} that are not marginal",
                 params.stable_pose,

@@ -86,7 +86,7 @@ impl GqcnnPolicy {
         let crop = CropParams::default();
         let arch = net.architecture();
         if arch.image_size_px != crop.size_px as usize || !(1..=2).contains(&arch.pose_inputs) {
-            return Err(crate::Error::Dataset {
+            return Err(crate::Error::Planner {
                 detail: format!(
                     "the network takes {0} x {0} crops and {1} pose inputs; the planner makes \
                      {2} x {2} crops and 1 (depth) or 2 (depth, theta) pose inputs",
@@ -133,15 +133,13 @@ impl GqcnnPolicy {
     fn score_view(&self, index: usize, view: &View<'_>, seed: u64) -> Result<Vec<ScoredGrasp>> {
         let k = &view.camera.intrinsics;
         let (w, h) = (k.width, k.height);
-        if view.depth_m.len() != w as usize * h as usize {
-            return Err(crate::Error::Dataset {
-                detail: format!(
-                    "view {index}: the depth image has {} pixels, the camera {w} x {h}",
-                    view.depth_m.len()
-                ),
-            });
-        }
-        let grasps = sample_image_grasps(view.depth_m, k, self.max_width_m, &self.sampler, seed);
+        let grasps = sample_image_grasps(view.depth_m, k, self.max_width_m, &self.sampler, seed)
+            .map_err(|e| match e {
+                crate::Error::Planner { detail } => crate::Error::Planner {
+                    detail: format!("view {index}: {detail}"),
+                },
+                other => other,
+            })?;
         let theta = theta_rad(view.camera);
         let pose_inputs = self.net.architecture().pose_inputs;
         let side = self.crop.size_px as usize;

@@ -11,6 +11,8 @@
 
 use mvgrasp_geometry::Intrinsics;
 use mvgrasp_grasp::ImageGrasp;
+
+use crate::error::{Error, Result};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -99,9 +101,12 @@ impl EdgeMap {
         self.normals[v as usize * self.width + u as usize]
     }
 
-    fn pixels(&self) -> Vec<usize> {
-        (0..self.normals.len())
-            .filter(|&i| self.normals[i].is_some())
+    /// Every edge pixel (row-major index) with its normal.
+    fn pixels(&self) -> Vec<(usize, [f32; 2])> {
+        self.normals
+            .iter()
+            .enumerate()
+            .filter_map(|(i, n)| n.map(|n| (i, n)))
             .collect()
     }
 }
@@ -109,16 +114,27 @@ impl EdgeMap {
 /// Grasp candidates in a `width` x `height` depth image (row-major, metres, 0 = nothing) seen
 /// with `intrinsics`, for a gripper that opens `max_width_m`; deterministic from `seed`.
 /// An image with no edges gives none.
+///
+/// # Errors
+/// [`Error::Planner`] when the image does not have the camera's width x height pixels.
 pub fn sample_image_grasps(
     depth_m: &[f32],
     intrinsics: &Intrinsics,
     max_width_m: f32,
     params: &ImageSamplerParams,
     seed: u64,
-) -> Vec<ImageGrasp> {
+) -> Result<Vec<ImageGrasp>> {
     let (w, h) = (intrinsics.width as usize, intrinsics.height as usize);
-    if depth_m.len() != w * h || w < 3 || h < 3 {
-        return Vec::new();
+    if depth_m.len() != w * h {
+        return Err(Error::Planner {
+            detail: format!(
+                "the depth image has {} pixels, the camera {w} x {h}",
+                depth_m.len()
+            ),
+        });
+    }
+    if w < 3 || h < 3 {
+        return Ok(Vec::new());
     }
     let edges = EdgeMap::new(depth_m, w, h, params.edge_threshold_m);
     let mut pixels = edges.pixels();
@@ -135,11 +151,8 @@ pub fn sample_image_grasps(
         // A partial Fisher-Yates shuffle: edge pixels in a seeded random order.
         let pick = rng.random_range(t..pixels.len());
         pixels.swap(t, pick);
-        let index = pixels[t];
+        let (index, n1) = pixels[t];
         let p1 = [(index % w) as f32, (index / w) as f32];
-        let Some(n1) = edges.normals[index] else {
-            continue;
-        };
         let turn = rng.random_range(-cone..=cone);
         let (sin, cos) = turn.sin_cos();
         let dir = [-(n1[0] * cos - n1[1] * sin), -(n1[0] * sin + n1[1] * cos)];
@@ -177,7 +190,7 @@ pub fn sample_image_grasps(
             });
         }
     }
-    found
+    Ok(found)
 }
 
 /// From `p1`, along `dir`, the first edge pixel farther than `min_px` and at most `max_px`
@@ -249,7 +262,8 @@ mod tests {
     #[test]
     fn grasps_on_a_box_close_across_its_narrow_side() {
         let (depth, k) = box_image();
-        let grasps = sample_image_grasps(&depth, &k, 0.08, &ImageSamplerParams::default(), 7);
+        let grasps =
+            sample_image_grasps(&depth, &k, 0.08, &ImageSamplerParams::default(), 7).unwrap();
         assert!(grasps.len() >= 30, "{} candidates", grasps.len());
         for g in &grasps {
             // Across the 4 cm side (the 12 cm side is wider than the gripper): the axis is
@@ -270,19 +284,27 @@ mod tests {
         let (depth, k) = box_image();
         let params = ImageSamplerParams::default();
         assert_eq!(
-            sample_image_grasps(&depth, &k, 0.08, &params, 3),
-            sample_image_grasps(&depth, &k, 0.08, &params, 3)
+            sample_image_grasps(&depth, &k, 0.08, &params, 3).unwrap(),
+            sample_image_grasps(&depth, &k, 0.08, &params, 3).unwrap()
         );
         let flat = vec![0.7f32; depth.len()];
-        assert!(sample_image_grasps(&flat, &k, 0.08, &params, 3).is_empty());
-        assert!(sample_image_grasps(&depth[1..], &k, 0.08, &params, 3).is_empty());
+        assert!(
+            sample_image_grasps(&flat, &k, 0.08, &params, 3)
+                .unwrap()
+                .is_empty()
+        );
+        let err = sample_image_grasps(&depth[1..], &k, 0.08, &params, 3).unwrap_err();
+        assert!(err.to_string().contains("516 x 386"), "{err}");
     }
 
     #[test]
     fn a_box_wider_than_the_gripper_has_no_grasp() {
         let (depth, k) = box_image();
+        let params = ImageSamplerParams::default();
         assert!(
-            sample_image_grasps(&depth, &k, 0.03, &ImageSamplerParams::default(), 1).is_empty()
+            sample_image_grasps(&depth, &k, 0.03, &params, 1)
+                .unwrap()
+                .is_empty()
         );
     }
 }
