@@ -63,14 +63,12 @@ pub fn grasp_quality(
     validate_friction_coef("grasp quality", friction_coef)?;
     wrench.validate()?;
     gripper.validate()?;
-    let mut buffer = Vec::new();
     Ok(evaluate(
         object,
         object_from_gripper,
         gripper,
         friction_coef,
         wrench,
-        &mut buffer,
     ))
 }
 
@@ -144,27 +142,18 @@ fn robust_checked(
     params: &RobustQualityParams,
     seed: u64,
 ) -> RobustQuality {
-    let mut buffer = Vec::with_capacity(params.wrench.wrenches_per_grasp() * 6);
     let nominal = evaluate(
         object,
         object_from_gripper,
         gripper,
         params.friction_coef_mean,
         &params.wrench,
-        &mut buffer,
     );
     let com = object.center_of_mass();
     let (mut epsilon_sum, mut closures, mut contacts) = (0.0, 0usize, 0usize);
     for i in 0..params.num_samples {
         let (pose, friction_coef) = perturb(params, object_from_gripper, com, seed, i as u64);
-        let sample = evaluate(
-            object,
-            &pose,
-            gripper,
-            friction_coef,
-            &params.wrench,
-            &mut buffer,
-        );
+        let sample = evaluate(object, &pose, gripper, friction_coef, &params.wrench);
         epsilon_sum += sample.epsilon;
         closures += usize::from(sample.force_closure);
         contacts += usize::from(sample.contacts.is_some());
@@ -188,7 +177,6 @@ fn evaluate(
     gripper: &Gripper,
     friction_coef: f32,
     wrench: &WrenchParams,
-    buffer: &mut Vec<f64>,
 ) -> GraspQuality {
     let Some(contacts) = find_contacts(object, object_from_gripper, gripper) else {
         return GraspQuality {
@@ -199,7 +187,7 @@ fn evaluate(
     };
     let force_closure = closure_holds(&contacts, friction_coef);
     let epsilon = if force_closure {
-        epsilon_checked(object, &contacts, friction_coef, wrench, buffer)
+        epsilon_checked(object, &contacts, friction_coef, wrench)
     } else {
         0.0
     };

@@ -124,31 +124,25 @@ pub fn contact_wrenches(
 ) -> Result<Vec<[f64; WRENCH_DIM]>> {
     validate_friction_coef("contact wrenches", friction_coef)?;
     params.validate()?;
-    let mut flat = Vec::with_capacity(params.wrenches_per_grasp() * WRENCH_DIM);
-    push_wrenches(
+    Ok(contact_wrenches_at(
         object.center_of_mass(),
         object.torque_scale_m(),
         contacts,
         friction_coef,
         params,
-        &mut flat,
-    );
-    Ok(flat
-        .chunks_exact(WRENCH_DIM)
-        .map(|w| [w[0], w[1], w[2], w[3], w[4], w[5]])
-        .collect())
+    ))
 }
 
-/// Appends the wrenches of [`contact_wrenches`] to `out`, flat (six numbers a wrench), for
-/// checked parameters.
-pub(crate) fn push_wrenches(
+/// The wrenches of [`contact_wrenches`] about `center_of_mass`, torques divided by
+/// `torque_scale_m`, for checked parameters.
+pub(crate) fn contact_wrenches_at(
     center_of_mass: Vec3,
     torque_scale_m: f32,
     contacts: &ContactPair,
     friction_coef: f32,
     params: &WrenchParams,
-    out: &mut Vec<f64>,
-) {
+) -> Vec<[f64; WRENCH_DIM]> {
+    let mut out = Vec::with_capacity(params.wrenches_per_grasp());
     let mu = f64::from(friction_coef);
     let inv_scale = 1.0 / f64::from(torque_scale_m).max(f64::MIN_POSITIVE);
     let com = center_of_mass.as_dvec3();
@@ -164,16 +158,17 @@ pub(crate) fn push_wrenches(
             let angle = std::f64::consts::TAU * j as f64 / faces as f64;
             let (sin, cos) = angle.sin_cos();
             let force = normal_share * (n + mu * (cos * t1 + sin * t2));
-            out.extend_from_slice(&force.to_array());
-            out.extend_from_slice(&(arm.cross(force) * inv_scale).to_array());
+            let torque = arm.cross(force) * inv_scale;
+            out.push([force.x, force.y, force.z, torque.x, torque.y, torque.z]);
         }
         if params.soft_fingers {
             for sign in [1.0, -1.0] {
-                out.extend_from_slice(&[0.0; 3]);
-                out.extend_from_slice(&(n * (sign * normal_share * torsion)).to_array());
+                let torque = n * (sign * normal_share * torsion);
+                out.push([0.0, 0.0, 0.0, torque.x, torque.y, torque.z]);
             }
         }
     }
+    out
 }
 
 #[cfg(test)]
@@ -201,10 +196,9 @@ mod tests {
     #[test]
     fn cone_edges_sit_at_the_friction_angle_and_torques_are_arm_cross_force() {
         let params = WrenchParams::default();
-        let mut out = Vec::new();
-        push_wrenches(Vec3::ZERO, 0.5, &box_pair(), 0.5, &params, &mut out);
-        assert_eq!(out.len(), params.wrenches_per_grasp() * WRENCH_DIM);
-        for w in out.chunks_exact(6).take(8) {
+        let out = contact_wrenches_at(Vec3::ZERO, 0.5, &box_pair(), 0.5, &params);
+        assert_eq!(out.len(), params.wrenches_per_grasp());
+        for w in out.iter().take(8) {
             // Normal part 1 along +x, tangential part of length mu.
             assert!((w[0] - 1.0).abs() < 1e-6);
             assert!(((w[1] * w[1] + w[2] * w[2]).sqrt() - 0.5).abs() < 1e-6);
@@ -213,7 +207,7 @@ mod tests {
             assert!((w[4] - 0.04 * w[2]).abs() < 1e-6 && (w[5] + 0.04 * w[1]).abs() < 1e-6);
         }
         // Torsion about the inward normal, both senses: (2/3) mu r / L.
-        let torsion = &out[8 * 6..9 * 6];
+        let torsion = &out[8];
         assert!(torsion[..3].iter().all(|f| *f == 0.0));
         assert!((torsion[3] - 2.0 / 3.0 * 0.5 * 0.005 / 0.5).abs() < 1e-9);
     }
