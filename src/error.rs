@@ -18,6 +18,9 @@ pub enum Error {
     /// Networks: loading weights, running them.
     #[error(transparent)]
     Infer(#[from] mvgrasp_infer::InferError),
+    /// Planning on depth images: images and views, the policy's network.
+    #[error(transparent)]
+    Planning(#[from] mvgrasp_planner::PlannerError),
     /// A file or folder could not be read or written.
     #[error("{path}: cannot {op}: {source}")]
     Io {

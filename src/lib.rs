@@ -1,9 +1,12 @@
 //! mvgrasp: 6-DoF parallel-jaw grasp planning from a few RGB cameras, on a laptop CPU.
 //!
-//! This root crate is the pipeline and the command-line tools; the work is done by the layered
-//! crates it re-exports (see ARCHITECTURE.md): [`geometry`], [`render`], [`grasp`], [`infer`].
-//! Today the pipeline stops at describing an object for planning: its mesh facts, the poses it
-//! rests in, and the cameras that will look at it.
+//! This root crate is the pipeline (`planner::plan_grasp`: render the views of an object at
+//! rest on a table, plan on their depth with a shipped GQ-CNN, check the best grasp
+//! analytically and in physics), the RGB-D and grasp dataset generators, and the command-line
+//! tools; the work is done by the layered crates it re-exports (see ARCHITECTURE.md):
+//! [`geometry`], [`render`], [`grasp`], [`infer`], and `mvgrasp_planner` (planning on depth
+//! images from any source; its types are re-exported in [`planner`]). Depth comes from the renderer today; the Learnt Stereo Machine's depth
+//! from RGB is not built yet.
 
 pub mod cli;
 pub mod convert;

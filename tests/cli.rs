@@ -4,6 +4,10 @@
 
 use std::process::Command;
 
+#[path = "support/shared_data.rs"]
+mod shared_data;
+use shared_data::shared_data;
+
 fn plan(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_plan"))
         .args(args)
@@ -107,12 +111,9 @@ fn plan_reports_bad_input_in_one_line_and_exits_2() {
 
 #[test]
 fn plan_describes_a_real_mesh_when_the_shared_data_is_there() {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/meshes");
-    let mesh = root.join("ycb/meshes/005_tomato_soup_can_textured.obj");
-    if !mesh.is_file() {
-        eprintln!("skipped: no shared mesh data at {}", root.display());
+    let Some(mesh) = shared_data("meshes/ycb/meshes/005_tomato_soup_can_textured.obj") else {
         return;
-    }
+    };
     let out = plan(&["--mesh", mesh.to_str().unwrap()]);
     assert!(
         out.status.success(),

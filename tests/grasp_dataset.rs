@@ -14,8 +14,8 @@ use mvgrasp::geometry::objects::{Category, ObjectSpec, generate as generate_obje
 use mvgrasp::geometry::{Camera, Vec3};
 use mvgrasp::grasp::quality::{find_contacts, robust_quality};
 use mvgrasp::grasp::{GraspObject, canonical_frame, check_collision};
-use mvgrasp::grasp_dataset::crop::image_to_crop;
 use mvgrasp::grasp_dataset::{CameraDistribution, GraspDatasetConfig, MultiViewCameras, generate};
+use mvgrasp_planner::crop::image_to_crop;
 use safetensors::SafeTensors;
 
 /// A small, quick config (debug builds run these).

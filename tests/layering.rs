@@ -34,6 +34,14 @@ const RULES: &[(&str, &str, &[&str], &[&str])] = &[
         &["wgpu", "pyo3", "numpy", "faer"],
     ),
     (
+        // Planning on depth images: no renderer, no dataset generator (those live above it,
+        // in the root package, and use its crop), no Python.
+        "mvgrasp-planner",
+        "crates/planner/Cargo.toml",
+        &["mvgrasp-geometry", "mvgrasp-grasp", "mvgrasp-infer"],
+        &["wgpu", "pyo3", "numpy", "png", "indicatif"],
+    ),
+    (
         "mvgrasp",
         "Cargo.toml",
         &[
@@ -41,6 +49,7 @@ const RULES: &[(&str, &str, &[&str], &[&str])] = &[
             "mvgrasp-render",
             "mvgrasp-grasp",
             "mvgrasp-infer",
+            "mvgrasp-planner",
         ],
         &["pyo3", "numpy"],
     ),
@@ -53,6 +62,7 @@ const RULES: &[(&str, &str, &[&str], &[&str])] = &[
             "mvgrasp-render",
             "mvgrasp-grasp",
             "mvgrasp-infer",
+            "mvgrasp-planner",
         ],
         &[],
     ),
@@ -150,5 +160,19 @@ fn the_checker_catches_an_upward_arrow() {
     );
     let (_, _, allowed, forbidden) = RULES[2]; // infer
     let violations = check("mvgrasp-infer", &deps, allowed, forbidden);
+    assert_eq!(violations.len(), 2, "{violations:?}");
+}
+
+#[test]
+fn the_planner_cannot_reach_the_dataset_generators_or_the_renderer() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dir.path().join("Cargo.toml");
+    std::fs::write(
+        &manifest,
+        "[package]\nname='x'\n[dependencies]\nmvgrasp = { path = '..' }\nmvgrasp-render = { path = '..' }\n",
+    )
+    .unwrap();
+    let rule = RULES.iter().find(|r| r.0 == "mvgrasp-planner").unwrap();
+    let violations = check(rule.0, &dependencies(&manifest), rule.2, rule.3);
     assert_eq!(violations.len(), 2, "{violations:?}");
 }

@@ -6,6 +6,9 @@
 mod common;
 
 use common::renderer;
+#[path = "support/shared_data.rs"]
+mod shared_data;
+use shared_data::shared_data;
 use std::path::{Path, PathBuf};
 
 use mvgrasp::convert::render_view;
@@ -106,11 +109,9 @@ fn rendered_depth_matches_ray_casts_on_built_in_objects() {
 
 #[test]
 fn rendered_depth_matches_ray_casts_on_real_meshes() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/meshes");
-    if !root.is_dir() {
-        eprintln!("skipped: no shared mesh data at {}", root.display());
+    let Some(root) = shared_data("meshes") else {
         return;
-    }
+    };
     let Some(renderer) = renderer() else { return };
     for file in [
         "ycb/meshes/006_mustard_bottle_textured.obj",

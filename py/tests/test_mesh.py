@@ -17,9 +17,9 @@ if sys.version_info >= (3, 11):
 else:  # the wheel supports Python 3.9+
     tomllib = pytest.importorskip("tomli")
 
+from conftest import shared_data
+
 REPO_ROOT = Path(__file__).resolve().parents[2]
-# The shared data folder sits beside the repository: <repo>/../shared/data.
-YCB_MESHES = REPO_ROOT.parent / "shared" / "data" / "meshes" / "ycb" / "meshes"
 
 # A tetrahedron with 5 cm legs along the axes.
 TETRA_VERTICES = np.array(
@@ -121,11 +121,9 @@ def test_nan_vertex_is_a_mesh_error(tmp_path: Path) -> None:
 
 
 def test_ycb_mesh_has_plausible_extents() -> None:
-    if not YCB_MESHES.is_dir():
-        pytest.skip(f"shared YCB meshes not found at {YCB_MESHES}")
-    objs = sorted(YCB_MESHES.glob("*.obj"))
-    if not objs:
-        pytest.skip(f"no .obj files in {YCB_MESHES}")
+    ycb_meshes = shared_data("meshes/ycb/meshes")
+    objs = sorted(ycb_meshes.glob("*.obj"))
+    assert objs, f"no .obj files in {ycb_meshes}"
     vertices, triangles = mvgrasp.load_mesh(objs[0])
     assert vertices.dtype == np.float32 and triangles.dtype == np.uint32
     assert len(vertices) > 100 and len(triangles) > 100

@@ -2,6 +2,7 @@
 //! colours, one colouring for the training views and a novel one for the test views.
 
 use mvgrasp_geometry::{Pose3, StablePoseParams, TriangleMesh, stable_poses};
+pub use mvgrasp_planner::seed::{name_hash, splitmix};
 use mvgrasp_render::{Colors, IDENTITY, MeshInput, Sides, random_colors};
 use serde::Serialize;
 
@@ -164,19 +165,4 @@ impl SceneData {
         }
         inputs
     }
-}
-
-/// SplitMix64: a well-mixed u64 from a u64, for deriving independent seeds.
-pub fn splitmix(x: u64) -> u64 {
-    let mut z = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
-/// FNV-1a of a name: seeds that depend on the object, not on its place in a list.
-pub fn name_hash(name: &str) -> u64 {
-    name.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
-    })
 }

@@ -3,6 +3,7 @@
 use std::f32::consts::TAU;
 
 use mvgrasp_geometry::{Camera, Intrinsics, Vec3};
+pub use mvgrasp_planner::theta_rad;
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
@@ -57,12 +58,6 @@ pub fn sample_camera(
         Vec3::Z
     };
     Ok(Camera::look_at(intrinsics, eye, look_at, up)?)
-}
-
-/// The angle between a camera's optical axis and the table plane (the seed paper's theta):
-/// pi/2 looking straight down, 0 looking across the table.
-pub fn theta_rad(camera: &Camera) -> f32 {
-    (-camera.optical_axis().z).clamp(-1.0, 1.0).asin()
 }
 
 #[cfg(test)]

@@ -6,6 +6,7 @@ use mvgrasp_geometry::{Intrinsics, IntrinsicsPreset};
 use mvgrasp_grasp::physics::PhysicsParams;
 use mvgrasp_grasp::quality::RobustQualityParams;
 use mvgrasp_grasp::{Gripper, GripperPreset, SamplingParams};
+pub use mvgrasp_planner::CropParams;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
@@ -124,25 +125,6 @@ impl Default for MultiViewCameras {
         Self {
             radius_m: [0.5, 0.75],
             elevation_deg: [10.0, 90.0],
-        }
-    }
-}
-
-/// How a grasp's crop is cut (Dex-Net 2.0: a 96 x 96 window scaled to 32 x 32).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct CropParams {
-    /// Side of the window in the rendered image, pixels.
-    pub window_px: u32,
-    /// Side of the stored crop, pixels (even, so that pixel `(size/2, size/2)` is the centre).
-    pub size_px: u32,
-}
-
-impl Default for CropParams {
-    fn default() -> Self {
-        Self {
-            window_px: 96,
-            size_px: 32,
         }
     }
 }

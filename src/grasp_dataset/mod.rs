@@ -26,7 +26,6 @@
 
 pub mod cameras;
 pub mod config;
-pub mod crop;
 pub mod noise;
 pub(crate) mod object;
 pub mod preview;

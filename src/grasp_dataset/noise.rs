@@ -5,16 +5,14 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Gamma, StandardNormal};
 
+use mvgrasp_planner::DepthImage;
+
 use super::config::NoiseParams;
 
-/// Adds the noise of `params` to a `width` x `height` depth image in place, from `seed`.
-pub fn add_depth_noise(
-    depth_m: &mut [f32],
-    width: u32,
-    height: u32,
-    params: &NoiseParams,
-    seed: u64,
-) {
+/// Adds the noise of `params` to `depth` in place, from `seed`.
+pub fn add_depth_noise(depth: &mut DepthImage, params: &NoiseParams, seed: u64) {
+    let (width, height) = (depth.width(), depth.height());
+    let depth_m = depth.as_mut_slice();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let k = params.gamma_shape;
     // Shape k, scale 1/k: mean 1, variance 1/k. `validate` guarantees k > 0.
@@ -49,6 +47,7 @@ pub fn add_depth_noise(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use mvgrasp_geometry::Intrinsics;
 
     #[test]
     fn noise_is_seeded_keeps_holes_and_has_dexnet_scale() {
@@ -56,12 +55,15 @@ mod tests {
             enabled: true,
             ..NoiseParams::default()
         };
-        let mut a = vec![0.7f32; 100 * 80];
-        a[5] = 0.0;
+        let k = Intrinsics::new(100.0, 100.0, 50.0, 40.0, 100, 80, 0.1, 2.0).unwrap();
+        let mut values = vec![0.7f32; 100 * 80];
+        values[5] = 0.0;
+        let mut a = DepthImage::new(k, values).unwrap();
         let mut b = a.clone();
-        add_depth_noise(&mut a, 100, 80, &params, 9);
-        add_depth_noise(&mut b, 100, 80, &params, 9);
+        add_depth_noise(&mut a, &params, 9);
+        add_depth_noise(&mut b, &params, 9);
         assert_eq!(a, b);
+        let a = a.as_slice();
         assert_eq!(a[5], 0.0);
         let mean = a.iter().sum::<f32>() / a.len() as f32;
         let std = (a.iter().map(|d| (d - mean).powi(2)).sum::<f32>() / a.len() as f32).sqrt();

@@ -13,9 +13,10 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-use super::cameras::{sample_camera, theta_rad};
+use mvgrasp_planner::{DepthImage, crop_depth, theta_rad};
+
+use super::cameras::sample_camera;
 use super::config::GraspDatasetConfig;
-use super::crop::crop_depth;
 use super::noise::add_depth_noise;
 use super::shard::Datapoint;
 use crate::convert::{render_view, row_major};
@@ -117,7 +118,7 @@ pub(crate) fn object_datapoints(
             let (w, h) = (camera.intrinsics.width, camera.intrinsics.height);
             if config.noise.enabled {
                 let seed = seed_of(object_seed, NOISE, pose_index as u64, view as u64);
-                add_depth_noise(&mut depth, w, h, &config.noise, seed);
+                add_depth_noise(&mut depth, &config.noise, seed);
             }
             let optical = camera.optical_axis();
             let max_tilt = config.max_tilt_deg.to_radians();
@@ -148,7 +149,7 @@ pub(crate) fn object_datapoints(
                 );
                 let collision_free = collision.is_free();
                 candidates.push(Datapoint {
-                    crop: crop_depth(&depth, w, h, image.center_px, image.angle_rad, &config.crop),
+                    crop: crop_depth(&depth, image.center_px, image.angle_rad, &config.crop),
                     grasp_depth_m: image.depth_m,
                     theta_rad: theta_rad(camera),
                     angle_rad: image.angle_rad,
@@ -220,16 +221,17 @@ pub(crate) fn render_depths(
     mesh: &TriangleMesh,
     table_from_object: &Pose3,
     cameras: &[mvgrasp_geometry::Camera],
-) -> Result<Vec<Vec<f32>>> {
+) -> Result<Vec<DepthImage>> {
     let data = SceneData::of_mesh(mesh, table_from_object, TABLE_HALF_SIDE_M);
     let inputs = data.mesh_inputs(mesh.triangles(), Colors::Uniform([200, 200, 200]), true);
     let scene = renderer.upload(&inputs)?;
     let views: Vec<_> = cameras.iter().map(render_view).collect();
-    Ok(renderer
-        .render(&scene, &views)?
-        .into_iter()
-        .map(|frame| frame.depth_m)
-        .collect())
+    let frames = renderer.render(&scene, &views)?;
+    Ok(cameras
+        .iter()
+        .zip(frames)
+        .map(|(camera, frame)| DepthImage::new(camera.intrinsics, frame.depth_m))
+        .collect::<mvgrasp_planner::Result<_>>()?)
 }
 
 /// Runs a rapier trial for the chosen share of the collision-free datapoints (in parallel,

@@ -2,12 +2,10 @@
 //! GQ-CNN policy over one or many views ([`policy`]), and the networks that ship with mvgrasp
 //! ([`models`]).
 
-pub mod models;
 pub mod pipeline;
-pub mod policy;
-pub mod sampler;
 
-pub use models::{ShippedModel, ViewSetting};
+pub use mvgrasp_planner::{
+    DepthImage, GqcnnPolicy, ImageSamplerParams, Plan, ScoredGrasp, ShippedModel, View,
+    ViewSetting, models, sample_image_grasps,
+};
 pub use pipeline::{PlanParams, PlanReport, PlanTimings, plan_grasp};
-pub use policy::{GqcnnPolicy, Plan, ScoredGrasp, View};
-pub use sampler::{ImageSamplerParams, sample_image_grasps};

@@ -13,10 +13,10 @@ use mvgrasp_grasp::{GraspObject, PaperGrasp, check_collision};
 use mvgrasp_render::Renderer;
 use serde::Serialize;
 
-use super::policy::{GqcnnPolicy, ScoredGrasp, View};
 use crate::error::{Error, Result};
 use crate::grasp_dataset::GraspDatasetConfig;
 use crate::grasp_dataset::object::render_depths;
+use mvgrasp_planner::{GqcnnPolicy, ScoredGrasp, View, theta_rad};
 
 /// What [`plan_grasp`] does.
 #[derive(Clone, Debug)]
@@ -168,14 +168,12 @@ pub fn plan_grasp(
     let render_s = started.elapsed().as_secs_f64();
 
     let started = Instant::now();
-    let views: Vec<View<'_>> = cameras
+    let views = cameras
         .iter()
-        .zip(&depths)
-        .map(|(camera, depth)| View {
-            camera,
-            depth_m: depth,
-        })
-        .collect();
+        .zip(depths)
+        .enumerate()
+        .map(|(i, (camera, depth))| View::new(i, *camera, depth))
+        .collect::<mvgrasp_planner::Result<Vec<_>>>()?;
     let plan = policy.plan(&views, params.seed)?;
     let plan_s = started.elapsed().as_secs_f64();
 
@@ -225,7 +223,7 @@ pub fn plan_grasp(
         .iter()
         .enumerate()
         .map(|(i, camera)| ViewSummary {
-            elevation_deg: crate::grasp_dataset::cameras::theta_rad(camera).to_degrees(),
+            elevation_deg: theta_rad(camera).to_degrees(),
             candidates: plan.candidates_per_view[i],
             best_quality: plan.best_in_view(i).map(|c| c.quality),
         })

@@ -6,6 +6,10 @@ use std::path::Path;
 
 use mvgrasp_grasp::{Gripper, UrdfGripperSpec};
 
+#[path = "../../../tests/support/shared_data.rs"]
+mod shared_data;
+use shared_data::shared_data;
+
 const SLIDE: &str = r#"<robot name="slide">
   <link name="palm"><collision><geometry><box size="0.1 0.04 0.02"/></geometry></collision></link>
   <link name="left_pad"><collision><geometry><box size="0.01 0.02 0.05"/></geometry></collision></link>
@@ -95,13 +99,11 @@ fn urdf_problems_name_the_file() {
 
 #[test]
 fn the_robotiq_2f_85_urdf_measures_close_to_its_datasheet() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(
-        "../../../shared/data/grippers/pybullet_grasper/grippers/robotiq_2f_85/robotiq_2f_85.urdf",
-    );
-    if !path.exists() {
-        eprintln!("skipped: {} is absent", path.display());
+    let Some(path) =
+        shared_data("grippers/pybullet_grasper/grippers/robotiq_2f_85/robotiq_2f_85.urdf")
+    else {
         return;
-    }
+    };
     let measured = Gripper::from_urdf(&path, &UrdfGripperSpec::default()).unwrap();
     let g = &measured.gripper;
     eprintln!(

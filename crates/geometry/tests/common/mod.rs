@@ -2,20 +2,13 @@
 
 use std::path::PathBuf;
 
+#[path = "../../../../tests/support/shared_data.rs"]
+mod shared_data;
+pub use shared_data::shared_data;
+
 /// `../shared/data/meshes` beside the repository (or `$MVGRASP_SHARED_DATA/meshes`), or `None`
-/// with a message on stderr so a skipped test says why.
+/// with a message on stderr so a skipped test says why (a failure under
+/// `MVGRASP_REQUIRE_SHARED_DATA=1`).
 pub fn shared_meshes() -> Option<PathBuf> {
-    let data = std::env::var_os("MVGRASP_SHARED_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"));
-    let meshes = data.join("meshes");
-    if meshes.is_dir() {
-        Some(meshes)
-    } else {
-        eprintln!(
-            "skipped: no shared mesh data at {} (set MVGRASP_SHARED_DATA)",
-            meshes.display()
-        );
-        None
-    }
+    shared_data("meshes")
 }

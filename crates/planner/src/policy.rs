@@ -2,28 +2,16 @@
 //! network, lifted to the world, best first (the seed paper's multi-view policy; with one
 //! top-down view, Dex-Net 2.0's).
 
-use mvgrasp_geometry::Camera;
 use mvgrasp_grasp::{Grasp, ImageGrasp};
 use mvgrasp_infer::{Gqcnn, GqcnnWorkspace, Tensor};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::sampler::{ImageSamplerParams, sample_image_grasps};
-use crate::dataset::splitmix;
-use crate::error::Result;
-use crate::grasp_dataset::CropParams;
-use crate::grasp_dataset::cameras::theta_rad;
-use crate::grasp_dataset::crop::crop_depth;
-
-/// One view the planner looks through: the camera and its depth image (row-major, metres,
-/// 0 = nothing, the camera's width x height).
-#[derive(Clone, Copy, Debug)]
-pub struct View<'a> {
-    /// Pose and intrinsics.
-    pub camera: &'a Camera,
-    /// Depth along the optical axis, metres.
-    pub depth_m: &'a [f32],
-}
+use crate::crop::{CropParams, crop_depth};
+use crate::depth_image::View;
+use crate::error::{PlannerError, Result};
+use crate::sampler::{ImageSamplerParams, sample_image_grasps};
+use crate::seed::splitmix;
 
 /// A candidate with the network's score.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -80,18 +68,17 @@ impl GqcnnPolicy {
     /// A policy with the default sampler and crops, for a gripper opening `max_width_m`.
     ///
     /// # Errors
-    /// A network whose crops are not the grasp dataset's size, or whose pose stream takes
-    /// something other than the grasp depth (1 input) or the depth and theta (2).
+    /// [`PlannerError::Network`] for a network whose crops are not the grasp dataset's size,
+    /// or whose pose stream takes something other than the grasp depth (1 input) or the depth
+    /// and theta (2).
     pub fn new(net: Gqcnn, max_width_m: f32) -> Result<Self> {
         let crop = CropParams::default();
         let arch = net.architecture();
         if arch.image_size_px != crop.size_px as usize || !(1..=2).contains(&arch.pose_inputs) {
-            return Err(crate::Error::Planner {
-                detail: format!(
-                    "the network takes {0} x {0} crops and {1} pose inputs; the planner makes \
-                     {2} x {2} crops and 1 (depth) or 2 (depth, theta) pose inputs",
-                    arch.image_size_px, arch.pose_inputs, crop.size_px
-                ),
+            return Err(PlannerError::Network {
+                image_px: arch.image_size_px,
+                pose_inputs: arch.pose_inputs,
+                crop_px: crop.size_px,
             });
         }
         Ok(Self {
@@ -112,8 +99,8 @@ impl GqcnnPolicy {
     /// from `seed` whatever the thread count.
     ///
     /// # Errors
-    /// A view whose depth image does not have its camera's size, or a network error.
-    pub fn plan(&self, views: &[View<'_>], seed: u64) -> Result<Plan> {
+    /// A network error.
+    pub fn plan(&self, views: &[View], seed: u64) -> Result<Plan> {
         let per_view = views
             .par_iter()
             .enumerate()
@@ -130,17 +117,9 @@ impl GqcnnPolicy {
     }
 
     /// The scored candidates of one view, in sampling order.
-    fn score_view(&self, index: usize, view: &View<'_>, seed: u64) -> Result<Vec<ScoredGrasp>> {
-        let k = &view.camera.intrinsics;
-        let (w, h) = (k.width, k.height);
-        let grasps = sample_image_grasps(view.depth_m, k, self.max_width_m, &self.sampler, seed)
-            .map_err(|e| match e {
-                crate::Error::Planner { detail } => crate::Error::Planner {
-                    detail: format!("view {index}: {detail}"),
-                },
-                other => other,
-            })?;
-        let theta = theta_rad(view.camera);
+    fn score_view(&self, index: usize, view: &View, seed: u64) -> Result<Vec<ScoredGrasp>> {
+        let grasps = sample_image_grasps(&view.depth, self.max_width_m, &self.sampler, seed);
+        let theta = view.theta_rad();
         let pose_inputs = self.net.architecture().pose_inputs;
         let side = self.crop.size_px as usize;
         let mut workspace = GqcnnWorkspace::default();
@@ -150,9 +129,7 @@ impl GqcnnPolicy {
             let mut poses = Vec::with_capacity(chunk.len() * pose_inputs);
             for g in chunk {
                 crops.extend(crop_depth(
-                    view.depth_m,
-                    w,
-                    h,
+                    &view.depth,
                     g.center_px,
                     g.angle_rad,
                     &self.crop,
@@ -168,7 +145,7 @@ impl GqcnnPolicy {
             scored.extend(chunk.iter().zip(quality).map(|(g, q)| ScoredGrasp {
                 view: index,
                 image: *g,
-                grasp: g.to_world(view.camera),
+                grasp: g.to_world(&view.camera),
                 theta_rad: theta,
                 quality: q,
             }));

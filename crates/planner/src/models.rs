@@ -62,8 +62,8 @@ macro_rules! shipped {
     ($name:literal) => {
         ShippedModel {
             name: $name,
-            description: include_str!(concat!("../../models/", $name, ".json")),
-            weights: include_bytes!(concat!("../../models/", $name, ".safetensors")),
+            description: include_str!(concat!("../../../models/", $name, ".json")),
+            weights: include_bytes!(concat!("../../../models/", $name, ".safetensors")),
         }
     };
 }

@@ -9,13 +9,12 @@
 //! the depth is sampled below the shallowest point between them (the fingers close around
 //! what sticks up). The network decides which of these is a good grasp.
 
-use mvgrasp_geometry::Intrinsics;
 use mvgrasp_grasp::ImageGrasp;
-
-use crate::error::{Error, Result};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
+
+use crate::depth_image::DepthImage;
 
 /// Parameters of [`sample_image_grasps`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -67,8 +66,9 @@ struct EdgeMap {
 }
 
 impl EdgeMap {
-    fn new(depth: &[f32], width: usize, height: usize, threshold: f32) -> Self {
-        let at = |u: usize, v: usize| depth[v * width + u];
+    fn new(depth: &DepthImage, threshold: f32) -> Self {
+        let (width, height) = (depth.width() as usize, depth.height() as usize);
+        let at = |u: usize, v: usize| depth.at(u as i64, v as i64);
         let mut normals = vec![None; width * height];
         for v in 1..height.saturating_sub(1) {
             for u in 1..width.saturating_sub(1) {
@@ -111,32 +111,21 @@ impl EdgeMap {
     }
 }
 
-/// Grasp candidates in a `width` x `height` depth image (row-major, metres, 0 = nothing) seen
-/// with `intrinsics`, for a gripper that opens `max_width_m`; deterministic from `seed`.
-/// An image with no edges gives none.
-///
-/// # Errors
-/// [`Error::Planner`] when the image does not have the camera's width x height pixels.
+/// Grasp candidates in `depth` for a gripper that opens `max_width_m`; deterministic from
+/// `seed`. An image with no edges gives none. Missing pixels (0) are never edges: an edge
+/// needs all four neighbours seen.
 pub fn sample_image_grasps(
-    depth_m: &[f32],
-    intrinsics: &Intrinsics,
+    depth: &DepthImage,
     max_width_m: f32,
     params: &ImageSamplerParams,
     seed: u64,
-) -> Result<Vec<ImageGrasp>> {
-    let (w, h) = (intrinsics.width as usize, intrinsics.height as usize);
-    if depth_m.len() != w * h {
-        return Err(Error::Planner {
-            detail: format!(
-                "the depth image has {} pixels, the camera {w} x {h}",
-                depth_m.len()
-            ),
-        });
+) -> Vec<ImageGrasp> {
+    let intrinsics = depth.intrinsics();
+    let w = depth.width() as usize;
+    if depth.width() < 3 || depth.height() < 3 {
+        return Vec::new();
     }
-    if w < 3 || h < 3 {
-        return Ok(Vec::new());
-    }
-    let edges = EdgeMap::new(depth_m, w, h, params.edge_threshold_m);
+    let edges = EdgeMap::new(depth, params.edge_threshold_m);
     let mut pixels = edges.pixels();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let cone = params.friction_coef.atan();
@@ -156,13 +145,13 @@ pub fn sample_image_grasps(
         let turn = rng.random_range(-cone..=cone);
         let (sin, cos) = turn.sin_cos();
         let dir = [-(n1[0] * cos - n1[1] * sin), -(n1[0] * sin + n1[1] * cos)];
-        let z1 = depth_m[index];
+        let z1 = depth.as_slice()[index];
         let max_px = max_width_m * focal / z1;
         let Some(p2) = walk_to_contact(&edges, p1, dir, max_px, cos_cone, params.min_distance_px)
         else {
             continue;
         };
-        let Some(top) = shallowest_between(depth_m, w, h, p1, p2) else {
+        let Some(top) = shallowest_between(depth, p1, p2) else {
             continue;
         };
         let span_px = (p2[0] - p1[0]).hypot(p2[1] - p1[1]);
@@ -190,7 +179,7 @@ pub fn sample_image_grasps(
             });
         }
     }
-    Ok(found)
+    found
 }
 
 /// From `p1`, along `dir`, the first edge pixel farther than `min_px` and at most `max_px`
@@ -213,17 +202,16 @@ fn walk_to_contact(
 }
 
 /// The smallest non-empty depth on the segment from `a` to `b`.
-fn shallowest_between(depth: &[f32], w: usize, h: usize, a: [f32; 2], b: [f32; 2]) -> Option<f32> {
+fn shallowest_between(depth: &DepthImage, a: [f32; 2], b: [f32; 2]) -> Option<f32> {
     let steps = (b[0] - a[0]).abs().max((b[1] - a[1]).abs()).ceil().max(1.0) as usize;
     (0..=steps)
-        .filter_map(|s| {
+        .map(|s| {
             let t = s as f32 / steps as f32;
             let (u, v) = (
                 (a[0] + (b[0] - a[0]) * t).round(),
                 (a[1] + (b[1] - a[1]) * t).round(),
             );
-            (u >= 0.0 && v >= 0.0 && (u as usize) < w && (v as usize) < h)
-                .then(|| depth[v as usize * w + u as usize])
+            depth.at(u as i64, v as i64)
         })
         .filter(|&d| d > 0.0)
         .min_by(f32::total_cmp)
@@ -238,10 +226,10 @@ fn axis_angle_between(a: f32, b: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use mvgrasp_geometry::IntrinsicsPreset;
+    use mvgrasp_geometry::{Intrinsics, IntrinsicsPreset};
 
     /// A 4 cm x 12 cm box, 5 cm tall, under a camera 0.7 m above the table (PhoXi S).
-    fn box_image() -> (Vec<f32>, Intrinsics) {
+    fn box_image() -> (DepthImage, Intrinsics) {
         let k = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
         let (w, h) = (k.width as usize, k.height as usize);
         let mut depth = vec![0.7f32; w * h];
@@ -256,14 +244,13 @@ mod tests {
                 }
             }
         }
-        (depth, k)
+        (DepthImage::new(k, depth).unwrap(), k)
     }
 
     #[test]
     fn grasps_on_a_box_close_across_its_narrow_side() {
         let (depth, k) = box_image();
-        let grasps =
-            sample_image_grasps(&depth, &k, 0.08, &ImageSamplerParams::default(), 7).unwrap();
+        let grasps = sample_image_grasps(&depth, 0.08, &ImageSamplerParams::default(), 7);
         assert!(grasps.len() >= 30, "{} candidates", grasps.len());
         for g in &grasps {
             // Across the 4 cm side (the 12 cm side is wider than the gripper): the axis is
@@ -284,27 +271,17 @@ mod tests {
         let (depth, k) = box_image();
         let params = ImageSamplerParams::default();
         assert_eq!(
-            sample_image_grasps(&depth, &k, 0.08, &params, 3).unwrap(),
-            sample_image_grasps(&depth, &k, 0.08, &params, 3).unwrap()
+            sample_image_grasps(&depth, 0.08, &params, 3),
+            sample_image_grasps(&depth, 0.08, &params, 3)
         );
-        let flat = vec![0.7f32; depth.len()];
-        assert!(
-            sample_image_grasps(&flat, &k, 0.08, &params, 3)
-                .unwrap()
-                .is_empty()
-        );
-        let err = sample_image_grasps(&depth[1..], &k, 0.08, &params, 3).unwrap_err();
-        assert!(err.to_string().contains("516 x 386"), "{err}");
+        let flat = DepthImage::new(k, vec![0.7f32; depth.as_slice().len()]).unwrap();
+        assert!(sample_image_grasps(&flat, 0.08, &params, 3).is_empty());
     }
 
     #[test]
     fn a_box_wider_than_the_gripper_has_no_grasp() {
-        let (depth, k) = box_image();
+        let (depth, _) = box_image();
         let params = ImageSamplerParams::default();
-        assert!(
-            sample_image_grasps(&depth, &k, 0.03, &params, 1)
-                .unwrap()
-                .is_empty()
-        );
+        assert!(sample_image_grasps(&depth, 0.03, &params, 1).is_empty());
     }
 }

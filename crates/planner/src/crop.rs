@@ -8,8 +8,32 @@
 //! is the mean of `round(W/S)^2` bilinear samples spread over its footprint (an area filter);
 //! a sample next to an empty pixel (0) takes its nearest pixel instead, and empty samples are
 //! left out of the mean.
+//!
+//! This is the GQ-CNN's input contract: the grasp datasets cut their training crops with it,
+//! and the planner cuts the crops it scores with it.
 
-use super::config::CropParams;
+use serde::{Deserialize, Serialize};
+
+use crate::depth_image::DepthImage;
+
+/// How a grasp's crop is cut (Dex-Net 2.0: a 96 x 96 window scaled to 32 x 32).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CropParams {
+    /// Side of the window in the rendered image, pixels.
+    pub window_px: u32,
+    /// Side of the stored crop, pixels (even, so that pixel `(size/2, size/2)` is the centre).
+    pub size_px: u32,
+}
+
+impl Default for CropParams {
+    fn default() -> Self {
+        Self {
+            window_px: 96,
+            size_px: 32,
+        }
+    }
+}
 
 /// The similarity between crop and image coordinates of one grasp (see the module docs).
 #[derive(Clone, Copy, Debug)]
@@ -75,18 +99,19 @@ pub fn image_to_crop(
     CropFrame::new(center_px, angle_rad, params).crop_point(uv)
 }
 
-/// Cuts the crop of the grasp at `center_px`, `angle_rad` from a `width` x `height` depth
-/// image (row-major, metres, 0 = nothing); `size_px^2` values, row-major.
+/// Cuts the crop of the grasp at `center_px`, `angle_rad` from `depth`; `size_px^2` values,
+/// row-major (an empty crop for a `size_px` of 0).
 pub fn crop_depth(
-    depth_m: &[f32],
-    width: u32,
-    height: u32,
+    depth: &DepthImage,
     center_px: [f32; 2],
     angle_rad: f32,
     params: &CropParams,
 ) -> Vec<f32> {
     let frame = CropFrame::new(center_px, angle_rad, params);
     let size = params.size_px as usize;
+    if size == 0 {
+        return Vec::new();
+    }
     let per_side = (params.window_px as f32 / params.size_px as f32)
         .round()
         .max(1.0) as usize;
@@ -102,7 +127,7 @@ pub fn crop_depth(
             for &dy in &offsets {
                 for &dx in &offsets {
                     let uv = frame.image_point([j as f32 + dx, i as f32 + dy]);
-                    let value = sample(depth_m, width, height, uv);
+                    let value = sample(depth, uv);
                     if value > 0.0 {
                         sum += f64::from(value);
                         count += 1;
@@ -120,15 +145,8 @@ pub fn crop_depth(
 }
 
 /// Bilinear sample at `uv`; the nearest pixel when a neighbour is empty; 0 outside the image.
-fn sample(depth_m: &[f32], width: u32, height: u32, [u, v]: [f32; 2]) -> f32 {
-    let (w, h) = (width as i64, height as i64);
-    let at = |x: i64, y: i64| -> f32 {
-        if (0..w).contains(&x) && (0..h).contains(&y) {
-            depth_m[(y * w + x) as usize]
-        } else {
-            0.0
-        }
-    };
+fn sample(depth: &DepthImage, [u, v]: [f32; 2]) -> f32 {
+    let at = |x: i64, y: i64| depth.at(x, y);
     if !(u.is_finite() && v.is_finite()) {
         return 0.0;
     }
@@ -152,6 +170,13 @@ fn sample(depth_m: &[f32], width: u32, height: u32, [u, v]: [f32; 2]) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use mvgrasp_geometry::Intrinsics;
+
+    fn image(width: u32, height: u32, depth_m: Vec<f32>) -> DepthImage {
+        let (cx, cy) = (width as f32 / 2.0, height as f32 / 2.0);
+        let k = Intrinsics::new(500.0, 500.0, cx, cy, width, height, 0.1, 2.0).unwrap();
+        DepthImage::new(k, depth_m).unwrap()
+    }
 
     #[test]
     fn crop_and_image_coordinates_invert_each_other() {
@@ -174,7 +199,8 @@ mod tests {
             .flat_map(|_| (0..w).map(|u| 0.5 + 0.001 * u as f32))
             .collect();
         let params = CropParams::default();
-        let crop = crop_depth(&depth, w, h, [100.0, 75.0], 0.0, &params);
+        let depth = image(w, h, depth);
+        let crop = crop_depth(&depth, [100.0, 75.0], 0.0, &params);
         assert!(
             (crop[16 * 32 + 16] - 0.6).abs() < 1e-5,
             "{}",
@@ -182,21 +208,14 @@ mod tests {
         );
         assert!((crop[16 * 32 + 17] - crop[16 * 32 + 16] - 0.003).abs() < 1e-5);
         assert!((crop[17 * 32 + 16] - crop[16 * 32 + 16]).abs() < 1e-6);
-        let turned = crop_depth(
-            &depth,
-            w,
-            h,
-            [100.0, 75.0],
-            std::f32::consts::FRAC_PI_2,
-            &params,
-        );
+        let turned = crop_depth(&depth, [100.0, 75.0], std::f32::consts::FRAC_PI_2, &params);
         assert!((turned[17 * 32 + 16] - turned[16 * 32 + 16] + 0.003).abs() < 1e-5);
     }
 
     #[test]
     fn outside_the_image_is_empty() {
-        let depth = vec![0.7f32; 64 * 64];
-        let crop = crop_depth(&depth, 64, 64, [2.0, 2.0], 0.0, &CropParams::default());
+        let depth = image(64, 64, vec![0.7f32; 64 * 64]);
+        let crop = crop_depth(&depth, [2.0, 2.0], 0.0, &CropParams::default());
         assert_eq!(crop[0], 0.0);
         assert_eq!(crop[16 * 32 + 16], 0.7);
     }

@@ -1,0 +1,148 @@
+//! A depth image with its size: what every sampler, crop and noise function takes, so that a
+//! slice of the wrong length cannot reach their indexing.
+
+use mvgrasp_geometry::{Camera, Intrinsics};
+
+use crate::error::{PlannerError, Result};
+
+/// Depth along the optical axis (z, not ray length), metres, row-major, with the intrinsics of
+/// the camera that saw it; a missing pixel is 0 (NaN, infinities and negative values are
+/// mapped to 0 when the image is made).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DepthImage {
+    intrinsics: Intrinsics,
+    depth_m: Vec<f32>,
+}
+
+impl DepthImage {
+    /// An image of `intrinsics.width` x `intrinsics.height` values.
+    ///
+    /// # Errors
+    /// [`PlannerError::DepthSize`] when `depth_m` has another length.
+    pub fn new(intrinsics: Intrinsics, mut depth_m: Vec<f32>) -> Result<Self> {
+        let expected = intrinsics.width as usize * intrinsics.height as usize;
+        if depth_m.len() != expected {
+            return Err(PlannerError::DepthSize {
+                width: intrinsics.width,
+                height: intrinsics.height,
+                expected,
+                got: depth_m.len(),
+            });
+        }
+        for d in &mut depth_m {
+            if !(d.is_finite() && *d > 0.0) {
+                *d = 0.0;
+            }
+        }
+        Ok(Self {
+            intrinsics,
+            depth_m,
+        })
+    }
+
+    /// The intrinsics of the camera that saw it.
+    pub fn intrinsics(&self) -> &Intrinsics {
+        &self.intrinsics
+    }
+
+    /// Width, pixels.
+    pub fn width(&self) -> u32 {
+        self.intrinsics.width
+    }
+
+    /// Height, pixels.
+    pub fn height(&self) -> u32 {
+        self.intrinsics.height
+    }
+
+    /// The values, row-major.
+    pub fn as_slice(&self) -> &[f32] {
+        &self.depth_m
+    }
+
+    /// The values, row-major, to change in place (keep missing pixels at 0).
+    pub fn as_mut_slice(&mut self) -> &mut [f32] {
+        &mut self.depth_m
+    }
+
+    /// The values, row-major.
+    pub fn into_vec(self) -> Vec<f32> {
+        self.depth_m
+    }
+
+    /// The depth at column `u`, row `v`; 0 outside the image.
+    pub fn at(&self, u: i64, v: i64) -> f32 {
+        let (w, h) = (i64::from(self.width()), i64::from(self.height()));
+        if (0..w).contains(&u) && (0..h).contains(&v) {
+            self.depth_m[(v * w + u) as usize]
+        } else {
+            0.0
+        }
+    }
+}
+
+/// One view the planner looks through: a camera (pose and intrinsics) and the depth image it
+/// saw, whoever made it (the renderer, a sensor file, a depth predictor).
+#[derive(Clone, Debug)]
+pub struct View {
+    /// Pose and intrinsics.
+    pub camera: Camera,
+    /// What it saw.
+    pub depth: DepthImage,
+}
+
+impl View {
+    /// A view of `depth` through `camera`.
+    ///
+    /// # Errors
+    /// [`PlannerError::ViewMismatch`] when the image's size is not the camera's (`view` names
+    /// it in the message).
+    pub fn new(view: usize, camera: Camera, depth: DepthImage) -> Result<Self> {
+        let k = &camera.intrinsics;
+        if (k.width, k.height) != (depth.width(), depth.height()) {
+            return Err(PlannerError::ViewMismatch {
+                view,
+                depth_width: depth.width(),
+                depth_height: depth.height(),
+                camera_width: k.width,
+                camera_height: k.height,
+            });
+        }
+        Ok(Self { camera, depth })
+    }
+
+    /// The angle between the optical axis and the table plane (the seed paper's theta, the
+    /// multi-view GQ-CNN's second pose input): pi/2 looking straight down.
+    pub fn theta_rad(&self) -> f32 {
+        theta_rad(&self.camera)
+    }
+}
+
+/// The angle between a camera's optical axis and the table plane (the seed paper's theta):
+/// pi/2 looking straight down, 0 looking across the table.
+pub fn theta_rad(camera: &Camera) -> f32 {
+    (-camera.optical_axis().z).clamp(-1.0, 1.0).asin()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mvgrasp_geometry::IntrinsicsPreset;
+
+    #[test]
+    fn a_wrong_length_is_an_error_and_bad_values_read_missing() {
+        let k = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
+        let n = (k.width * k.height) as usize;
+        let err = DepthImage::new(k, vec![0.5; n - 1]).unwrap_err();
+        assert!(err.to_string().contains("516 x 386"), "{err}");
+        let mut values = vec![0.5; n];
+        values[0] = f32::NAN;
+        values[1] = f32::INFINITY;
+        values[2] = -1.0;
+        let image = DepthImage::new(k, values).unwrap();
+        assert_eq!(&image.as_slice()[..4], &[0.0, 0.0, 0.0, 0.5]);
+        assert_eq!(image.at(-1, 0), 0.0);
+        assert_eq!(image.at(3, 0), 0.5);
+        assert_eq!(image.at(i64::from(k.width), 0), 0.0);
+    }
+}

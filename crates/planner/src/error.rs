@@ -1,0 +1,67 @@
+//! The one error type of `mvgrasp-planner`.
+
+/// Everything that can go wrong while planning.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PlannerError {
+    /// A depth image whose pixel count is not its intrinsics' width x height.
+    #[error("depth image: {got} values for a {width} x {height} image (expected {expected})")]
+    DepthSize {
+        /// Image width, pixels.
+        width: u32,
+        /// Image height, pixels.
+        height: u32,
+        /// `width * height`.
+        expected: usize,
+        /// Values given.
+        got: usize,
+    },
+    /// A view whose depth image was made with other intrinsics than its camera's.
+    #[error(
+        "view {view}: the depth image is {depth_width} x {depth_height} pixels, the camera's \
+         {camera_width} x {camera_height}"
+    )]
+    ViewMismatch {
+        /// The view.
+        view: usize,
+        /// The depth image's size.
+        depth_width: u32,
+        /// See `depth_width`.
+        depth_height: u32,
+        /// The camera's size.
+        camera_width: u32,
+        /// See `camera_width`.
+        camera_height: u32,
+    },
+    /// A network the planner cannot feed.
+    #[error(
+        "network: it takes {image_px} x {image_px} crops and {pose_inputs} pose inputs; the \
+         planner makes {crop_px} x {crop_px} crops and 1 (depth) or 2 (depth, theta) pose inputs"
+    )]
+    Network {
+        /// The network's crop side, pixels.
+        image_px: usize,
+        /// The network's pose inputs.
+        pose_inputs: usize,
+        /// The planner's crop side, pixels.
+        crop_px: u32,
+    },
+    /// A parameter out of its valid range.
+    #[error("{op}: {name} = {value} is invalid: {expected}")]
+    InvalidParameter {
+        /// The operation.
+        op: &'static str,
+        /// The parameter.
+        name: &'static str,
+        /// Its value, printed.
+        value: String,
+        /// What would be valid.
+        expected: &'static str,
+    },
+    /// Running a network failed (or its shipped weights are broken).
+    #[error(transparent)]
+    Infer(#[from] mvgrasp_infer::InferError),
+}
+
+/// `Result` with [`PlannerError`].
+pub type Result<T, E = PlannerError> = std::result::Result<T, E>;

@@ -1,0 +1,16 @@
+#![doc = include_str!("../README.md")]
+
+pub mod crop;
+pub mod depth_image;
+pub mod error;
+pub mod models;
+pub mod policy;
+pub mod sampler;
+pub mod seed;
+
+pub use crop::{CropParams, crop_depth};
+pub use depth_image::{DepthImage, View, theta_rad};
+pub use error::{PlannerError, Result};
+pub use models::{ShippedModel, ViewSetting};
+pub use policy::{GqcnnPolicy, Plan, ScoredGrasp};
+pub use sampler::{ImageSamplerParams, sample_image_grasps};
