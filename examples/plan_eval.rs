@@ -5,7 +5,11 @@
 //!
 //! ```text
 //! cargo run --release --example plan_eval -- [--per-category 2] [--data ../shared/data/meshes]
+//!     [--camera phoxi_s|primesense|realsense_d435] [--top-down-only]
 //! ```
+//!
+//! `--camera` renders every view with another camera's intrinsics: the planner scales its
+//! crops to the camera (the network's input contract), and this measures what that keeps.
 //!
 //! Policies: the multi-view GQ-CNN over the paper's 10 test views (`plan`'s default), the
 //! same network with the top-down view alone, and the top-down GQ-CNN with the top-down view
@@ -19,7 +23,7 @@ use std::process::ExitCode;
 
 use clap::Parser;
 use mvgrasp::geometry::objects::{Category, generate};
-use mvgrasp::geometry::{TriangleMesh, load_mesh};
+use mvgrasp::geometry::{Intrinsics, IntrinsicsPreset, TriangleMesh, load_mesh};
 use mvgrasp::grasp::physics::FailureStage;
 use mvgrasp::planner::{GqcnnPolicy, PlanParams, ShippedModel, models, plan_grasp};
 use mvgrasp::render::{Backend, Renderer};
@@ -38,6 +42,17 @@ struct Args {
     /// views: 0.5).
     #[arg(long, default_value_t = 0.65)]
     mv_radius_m: f32,
+    /// The cameras' intrinsics preset (phoxi_s, the networks' training camera; primesense;
+    /// realsense_d435).
+    #[arg(long, default_value = "phoxi_s")]
+    camera: String,
+    /// Only the top-down GQ-CNN (`plan`'s default policy).
+    #[arg(long)]
+    top_down_only: bool,
+    /// Cut the training window in pixels whatever the camera (what the planner did before it
+    /// scaled crops by the focal ratio), for comparison.
+    #[arg(long)]
+    unscaled_crops: bool,
 }
 
 #[derive(Default)]
@@ -71,6 +86,7 @@ fn run(args: &Args) -> Result<(), String> {
             objects.push((m.rsplit('/').next().unwrap_or(m).to_string(), mesh));
         }
     }
+    let preset: IntrinsicsPreset = args.camera.parse().map_err(|e| format!("--camera: {e}"))?;
     let renderer = Renderer::new(Backend::Auto).map_err(|e| e.to_string())?;
     // (label, network, views, camera distance): `plan`'s settings (ViewSetting). The top-down
     // GQ-CNN, like Dex-Net 2.0's, only knows the distances it was trained at (0.65 to 0.75 m).
@@ -79,18 +95,37 @@ fn run(args: &Args) -> Result<(), String> {
         ("MV-GQ-CNN, top-down", models::MVGQCNN, 1, args.mv_radius_m),
         ("GQ-CNN, top-down", models::GQCNN_TOPDOWN, 1, 0.7),
     ];
+    let policies = if args.top_down_only {
+        &policies[2..]
+    } else {
+        &policies[..]
+    };
+    println!(
+        "camera: {} (every view), crops {}",
+        preset.name(),
+        if args.unscaled_crops {
+            "unscaled (the training window in pixels)"
+        } else {
+            "scaled to the camera's focal length"
+        }
+    );
     let mut tallies: Vec<Tally> = policies.iter().map(|_| Tally::default()).collect();
     println!("object                         policy                 quality  robust  physics");
     for (name, mesh) in &objects {
         for ((label, model, views, radius_m), tally) in policies.iter().zip(&mut tallies) {
             let mut params = PlanParams {
                 max_views: *views,
+                intrinsics: Intrinsics::preset(preset),
                 ..Default::default()
             };
             params.views.radius_m = *radius_m;
             let gripper = params.labels.gripper().map_err(|e| e.to_string())?;
             let net = model.load().map_err(|e| e.to_string())?;
-            let policy = GqcnnPolicy::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
+            let mut policy =
+                GqcnnPolicy::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
+            if args.unscaled_crops {
+                policy.contract.focal_px = params.intrinsics.fx;
+            }
             let report = match plan_grasp(&renderer, mesh, &policy, &params) {
                 Ok(r) => r,
                 Err(e) => {

@@ -1,6 +1,6 @@
 """Export of a trained GQ-CNN for the Rust runtime: ``NAME.safetensors`` (every tensor of the
-state dict, float32) and ``NAME.json`` (format, architecture, normalisation, tensor shapes, and
-whatever the caller records about training)."""
+state dict, float32) and ``NAME.json`` (format, architecture, normalisation, tensor shapes, the
+input contract, and whatever the caller records about training)."""
 
 from __future__ import annotations
 
@@ -17,8 +17,17 @@ from mvgrasp_training.gqcnn import GQCNN
 FORMAT = "mvgrasp-gqcnn/1"
 
 
-def export_gqcnn(net: GQCNN, stem: str | Path, training: dict[str, Any] | None = None) -> Path:
-    """Writes ``stem.safetensors`` and ``stem.json``; returns the JSON's path."""
+def export_gqcnn(
+    net: GQCNN,
+    stem: str | Path,
+    training: dict[str, Any] | None = None,
+    input_contract: dict[str, Any] | None = None,
+) -> Path:
+    """Writes ``stem.safetensors`` and ``stem.json``; returns the JSON's path.
+
+    ``input_contract`` (see ``train.input_contract``) is what the network expects of its inputs;
+    the Rust planner cuts its crops to it.
+    """
     stem = Path(stem)
     stem.parent.mkdir(parents=True, exist_ok=True)
     tensors = {k: v.detach().to(torch.float32).contiguous() for k, v in net.state_dict().items()}
@@ -37,6 +46,8 @@ def export_gqcnn(net: GQCNN, stem: str | Path, training: dict[str, Any] | None =
         "tensors": {k: list(v.shape) for k, v in sorted(tensors.items())},
         "training": training or {},
     }
+    if input_contract is not None:
+        description["input"] = input_contract
     path = stem.with_suffix(".json")
     path.write_text(json.dumps(description, indent=2) + "\n")
     return path

@@ -23,8 +23,10 @@ from __future__ import annotations
 
 import argparse
 import copy
+import hashlib
 import json
 import os
+import subprocess
 import sys
 import time
 from dataclasses import asdict, dataclass
@@ -75,6 +77,55 @@ def load_arrays(root: Path, pose_inputs: int) -> Arrays:
     if not parts["label"]:
         raise ValueError(f"{root}: the dataset has no datapoints")
     return Arrays(*(np.concatenate(parts[k]) for k in ("depth", "pose", "label", "object_id")))
+
+
+REPO_ROOT = Path(__file__).resolve().parents[2]
+
+
+def dataset_record(root: Path) -> dict[str, Any]:
+    """How the export names a dataset: its folder relative to the repository (no absolute path
+    of the machine it was trained on) and the SHA-256 of its manifest."""
+    manifest = Path(root) / "dataset.json"
+    return {
+        "path": os.path.relpath(Path(root).resolve(), REPO_ROOT),
+        "manifest_sha256": hashlib.sha256(manifest.read_bytes()).hexdigest(),
+    }
+
+
+def code_commit() -> str:
+    """The repository's commit (with ``-dirty`` when the tree has changes), or ``unknown``."""
+
+    def git(*args: str) -> str:
+        return subprocess.run(
+            ["git", "-C", str(REPO_ROOT), *args], capture_output=True, text=True, check=True
+        ).stdout.strip()
+
+    try:
+        commit = git("rev-parse", "HEAD")
+        return commit + ("-dirty" if git("status", "--porcelain", "--untracked-files=no") else "")
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def input_contract(root: Path, train_set: Arrays, pose_inputs: int) -> dict[str, Any]:
+    """What the network will expect of its inputs, from the dataset's manifest and crops: the
+    crop window and side, the training camera's focal length, the camera distances, the ranges
+    of the pose inputs, and their order (the Rust planner scales crops to other cameras by it).
+    """
+    manifest = GraspDataset.open(root).manifest
+    config = manifest["config"]
+    contract: dict[str, Any] = {
+        "crop_window_px": int(config["crop"]["window_px"]),
+        "crop_size_px": int(config["crop"]["size_px"]),
+        "focal_px": float(manifest["intrinsics"]["fx"]),
+        "camera_distance_m": [float(v) for v in config["cameras"]["radius_m"]],
+        "grasp_depth_m": [float(train_set.pose[:, 0].min()), float(train_set.pose[:, 0].max())],
+        "pose_inputs": ["grasp_depth_m", "theta_rad"][:pose_inputs],
+    }
+    if pose_inputs == 2:
+        theta = train_set.pose[:, 1]
+        contract["theta_rad"] = [float(theta.min()), float(theta.max())]
+    return contract
 
 
 def split_by_object(data: Arrays, val_fraction: float, seed: int) -> tuple[Arrays, Arrays]:
@@ -253,9 +304,13 @@ def _train(
             partial.replace(checkpoint)
         if world > 1:
             dist.barrier()
+    recorded_config = json.loads(json.dumps(asdict(config), default=str))
+    recorded_config["data"]["dataset_dir"] = dataset_record(config.data.dataset_dir)["path"]
     report: dict[str, Any] = {
-        "config": json.loads(json.dumps(asdict(config), default=str)),
-        "dataset": str(config.data.dataset_dir),
+        "config": recorded_config,
+        "dataset": dataset_record(config.data.dataset_dir),
+        "code_commit": code_commit(),
+        "torch": torch.__version__,
         "train_count": len(train_set),
         "train_objects": int(len(np.unique(train_set.object_id))),
         "val_objects": int(len(np.unique(val_set.object_id))),
@@ -272,10 +327,15 @@ def _train(
     if test_dir is not None:
         test = load_arrays(test_dir, pose_inputs)
         report["test"] = metrics(predict(net, test), test.label)
-        report["test_dataset"] = str(test_dir)
+        report["test_dataset"] = dataset_record(test_dir)
     (out / "history.json").write_text(json.dumps(history, indent=2) + "\n")
     plot_history(history, out / "learning_curve.png", title=config.name)
-    export_gqcnn(net, out / config.name, report)
+    export_gqcnn(
+        net,
+        out / config.name,
+        report,
+        input_contract(config.data.dataset_dir, train_set, pose_inputs),
+    )
     return report
 
 

@@ -14,8 +14,15 @@ torch = pytest.importorskip("torch")
 
 from conftest import generate_grasp_dataset  # noqa: E402
 from mvgrasp_training.config import parse_config  # noqa: E402
+from mvgrasp_training.export import load_gqcnn  # noqa: E402
 from mvgrasp_training.gqcnn import GQCNN, small  # noqa: E402
-from mvgrasp_training.train import train  # noqa: E402
+from mvgrasp_training.train import (  # noqa: E402
+    load_arrays,
+    metrics,
+    predict,
+    split_by_object,
+    train,
+)
 
 
 @pytest.fixture(scope="module")
@@ -41,11 +48,39 @@ def test_a_short_run_trains_resumes_and_exports(dataset: Path, tmp_path: Path) -
     )
     out = tmp_path / "run"
     report = train(config, out)
-    assert 0.0 <= report["val"]["balanced_accuracy"] <= 1.0
     assert report["val_objects"] == 1 and report["train_objects"] == 3
     description = json.loads((out / "test.json").read_text())
     assert description["training"]["train_count"] == report["train_count"]
     assert (out / "test.safetensors").exists()
+    # The reported validation figures are the exported network's on the held-out object.
+    net, _ = load_gqcnn(out / "test.json")
+    _, val_set = split_by_object(load_arrays(data, 1), 0.25, 0)
+    recomputed = metrics(predict(net, val_set), val_set.label)
+    assert recomputed["count"] == report["val"]["count"] > 0
+    for key in ("balanced_accuracy", "precision", "recall"):
+        assert recomputed[key] == pytest.approx(report["val"][key], nan_ok=True), key
+    # The input contract comes from the dataset (the default PhoXi S, Dex-Net's 96 -> 32 crop).
+    contract = description["input"]
+    assert contract["crop_window_px"] == 96 and contract["crop_size_px"] == 32
+    assert contract["focal_px"] == pytest.approx(552.5)
+    assert contract["camera_distance_m"] == pytest.approx([0.65, 0.75])
+    low, high = contract["grasp_depth_m"]
+    assert 0.5 < low < high < 0.8
+    assert contract["pose_inputs"] == ["grasp_depth_m"]
+    # Provenance without a machine's absolute paths.
+    training = description["training"]
+    assert len(training["dataset"]["manifest_sha256"]) == 64
+    assert training["torch"] == torch.__version__
+    assert training["code_commit"]
+
+    def strings(value):
+        if isinstance(value, dict):
+            return [s for v in value.values() for s in strings(v)]
+        if isinstance(value, list):
+            return [s for v in value for s in strings(v)]
+        return [value] if isinstance(value, str) else []
+
+    assert not [s for s in strings(description) if s.startswith("/")], "absolute path recorded"
     # A second run with more epochs resumes after the first.
     longer = parse_config(
         {

@@ -46,17 +46,15 @@ pub enum PlannerError {
         /// The planner's crop side, pixels.
         crop_px: u32,
     },
-    /// A parameter out of its valid range.
-    #[error("{op}: {name} = {value} is invalid: {expected}")]
-    InvalidParameter {
-        /// The operation.
-        op: &'static str,
-        /// The parameter.
-        name: &'static str,
-        /// Its value, printed.
-        value: String,
-        /// What would be valid.
-        expected: &'static str,
+    /// A camera whose images the network cannot be fed.
+    #[error("camera with fx = {fx}, fy = {fy}: {detail}")]
+    Camera {
+        /// Focal length along x, pixels.
+        fx: f32,
+        /// Focal length along y, pixels.
+        fy: f32,
+        /// Why not.
+        detail: &'static str,
     },
     /// Running a network failed (or its shipped weights are broken).
     #[error(transparent)]

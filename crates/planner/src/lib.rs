@@ -1,5 +1,6 @@
 #![doc = include_str!("../README.md")]
 
+pub mod contract;
 pub mod crop;
 pub mod depth_image;
 pub mod error;
@@ -8,6 +9,7 @@ pub mod policy;
 pub mod sampler;
 pub mod seed;
 
+pub use contract::InputContract;
 pub use crop::{CropParams, crop_depth};
 pub use depth_image::{DepthImage, View, theta_rad};
 pub use error::{PlannerError, Result};

@@ -7,7 +7,8 @@ use mvgrasp_infer::{Gqcnn, GqcnnWorkspace, Tensor};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::crop::{CropParams, crop_depth};
+use crate::contract::InputContract;
+use crate::crop::crop_depth;
 use crate::depth_image::View;
 use crate::error::{PlannerError, Result};
 use crate::sampler::{ImageSamplerParams, sample_image_grasps};
@@ -56,8 +57,8 @@ pub struct GqcnnPolicy {
     net: Gqcnn,
     /// The depth-image sampler's parameters.
     pub sampler: ImageSamplerParams,
-    /// The crops the network was trained on (the grasp dataset's).
-    pub crop: CropParams,
+    /// What the network expects: its crops are cut to it for each view's camera.
+    pub contract: InputContract,
     /// The gripper's widest opening, metres.
     pub max_width_m: f32,
     /// Crops scored per network call.
@@ -68,23 +69,25 @@ impl GqcnnPolicy {
     /// A policy with the default sampler and crops, for a gripper opening `max_width_m`.
     ///
     /// # Errors
-    /// [`PlannerError::Network`] for a network whose crops are not the grasp dataset's size,
-    /// or whose pose stream takes something other than the grasp depth (1 input) or the depth
-    /// and theta (2).
+    /// [`PlannerError::Network`] for a network whose crops are not its contract's size, or
+    /// whose pose stream takes something other than the grasp depth (1 input) or the depth and
+    /// theta (2).
     pub fn new(net: Gqcnn, max_width_m: f32) -> Result<Self> {
-        let crop = CropParams::default();
+        let contract = InputContract::of(&net);
         let arch = net.architecture();
-        if arch.image_size_px != crop.size_px as usize || !(1..=2).contains(&arch.pose_inputs) {
+        if arch.image_size_px != contract.crop.size_px as usize
+            || !(1..=2).contains(&arch.pose_inputs)
+        {
             return Err(PlannerError::Network {
                 image_px: arch.image_size_px,
                 pose_inputs: arch.pose_inputs,
-                crop_px: crop.size_px,
+                crop_px: contract.crop.size_px,
             });
         }
         Ok(Self {
             net,
             sampler: ImageSamplerParams::default(),
-            crop,
+            contract,
             max_width_m,
             batch: 256,
         })
@@ -99,7 +102,8 @@ impl GqcnnPolicy {
     /// from `seed` whatever the thread count.
     ///
     /// # Errors
-    /// A network error.
+    /// [`PlannerError::Camera`] for a view whose camera the network cannot be fed (see
+    /// [`InputContract::crop_for`]), or a network error.
     pub fn plan(&self, views: &[View], seed: u64) -> Result<Plan> {
         let per_view = views
             .par_iter()
@@ -118,22 +122,18 @@ impl GqcnnPolicy {
 
     /// The scored candidates of one view, in sampling order.
     fn score_view(&self, index: usize, view: &View, seed: u64) -> Result<Vec<ScoredGrasp>> {
+        let crop = self.contract.crop_for(&view.camera.intrinsics)?;
         let grasps = sample_image_grasps(&view.depth, self.max_width_m, &self.sampler, seed);
         let theta = view.theta_rad();
         let pose_inputs = self.net.architecture().pose_inputs;
-        let side = self.crop.size_px as usize;
+        let side = crop.size_px as usize;
         let mut workspace = GqcnnWorkspace::default();
         let mut scored = Vec::with_capacity(grasps.len());
         for chunk in grasps.chunks(self.batch.max(1)) {
             let mut crops = Vec::with_capacity(chunk.len() * side * side);
             let mut poses = Vec::with_capacity(chunk.len() * pose_inputs);
             for g in chunk {
-                crops.extend(crop_depth(
-                    &view.depth,
-                    g.center_px,
-                    g.angle_rad,
-                    &self.crop,
-                ));
+                crops.extend(crop_depth(&view.depth, g.center_px, g.angle_rad, &crop));
                 poses.push(g.depth_m);
                 if pose_inputs == 2 {
                     poses.push(theta);

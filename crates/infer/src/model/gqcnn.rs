@@ -4,7 +4,9 @@
 use std::path::Path;
 
 use crate::error::{InferError, Result};
-use crate::model::description::{Architecture, ConvSpec, GQCNN_FORMAT, GqcnnDescription};
+use crate::model::description::{
+    Architecture, ConvSpec, GQCNN_FORMAT, GqcnnDescription, InputSpec,
+};
 use crate::model::image_stream::{ImageStream, StreamBuffers};
 use crate::model::weights::Weights;
 use crate::ops::{LocalResponseNorm, concat_into, linear_into, relu, softmax};
@@ -99,7 +101,12 @@ impl Gqcnn {
                 description.format
             )));
         }
-        check_architecture(&description.architecture).map_err(model_error)?;
+        check_architecture(&description.architecture).map_err(&model_error)?;
+        if let Some(input) = &description.input {
+            input
+                .check(&description.architecture)
+                .map_err(model_error)?;
+        }
         Ok(description)
     }
 
@@ -189,6 +196,11 @@ impl Gqcnn {
     /// The description it was loaded from.
     pub fn description(&self) -> &GqcnnDescription {
         &self.description
+    }
+
+    /// The input contract its training recorded, if it did.
+    pub fn input_spec(&self) -> Option<&InputSpec> {
+        self.description.input.as_ref()
     }
 
     /// The layers.

@@ -5,6 +5,8 @@ pub mod gqcnn;
 mod image_stream;
 pub mod weights;
 
-pub use description::{Architecture, ConvSpec, GQCNN_FORMAT, GqcnnDescription, Normalisation};
+pub use description::{
+    Architecture, ConvSpec, GQCNN_FORMAT, GqcnnDescription, InputSpec, Normalisation,
+};
 pub use gqcnn::{Gqcnn, GqcnnWorkspace};
 pub use weights::Weights;
