@@ -15,7 +15,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use clap::Parser;
-use mvgrasp::geometry::{StablePoseParams, load_mesh, stable_poses};
+use mvgrasp::geometry::{RestingPoses, load_mesh};
 use mvgrasp::grasp::physics::{PhysicsParams, StageCounts};
 use mvgrasp::grasp::{AnalysisConfig, GraspObject, Gripper, analyse};
 use serde::Serialize;
@@ -80,15 +80,17 @@ fn run(args: &Args) -> Result<(), String> {
         }
         let started = Instant::now();
         let mesh = load_mesh(&path).map_err(|e| e.to_string())?;
-        let poses = stable_poses(&mesh, &StablePoseParams::default()).map_err(|e| e.to_string())?;
-        let Some(pose_index) = poses.iter().position(|p| !p.marginal) else {
+        let rest = RestingPoses::of(&mesh).map_err(|e| e.to_string())?;
+        // Grasps are judged on objects that rest steadily: one that only rolls is left out.
+        if rest.only_marginal() {
             eprintln!("skipping {relative}: every stable pose is marginal");
             continue;
-        };
+        }
+        let (pose_index, pose) = rest.get(0).map_err(|e| e.to_string())?;
         let object = GraspObject::new(mesh).map_err(|e| e.to_string())?;
         let analysis = analyse(
             &object,
-            &poses[pose_index].table_from_object,
+            &pose.table_from_object,
             &gripper,
             &config,
             args.seed,

@@ -47,13 +47,6 @@ pub enum Error {
         /// The file.
         path: PathBuf,
     },
-    /// A planning request makes no sense (a depth image of the wrong size, a network the
-    /// planner cannot feed, a stable pose the object does not have).
-    #[error("plan: {detail}")]
-    Planner {
-        /// What is wrong.
-        detail: String,
-    },
     /// A dataset request makes no sense (duplicate names, nothing to do, ...).
     #[error("dataset: {detail}")]
     Dataset {

@@ -77,6 +77,21 @@ def test_a_finished_shard_is_not_made_again(single_machine: Path, config: Path) 
     assert files(single_machine) == before
 
 
+def test_a_shard_made_with_another_config_is_refused_not_reused(
+    single_machine: Path, tmp_path: Path
+) -> None:
+    # The regression: from Python the old shards were reused and the manifest then claimed
+    # the new config. Every shard records the hash of its config and objects.
+    other = tmp_path / "other.toml"
+    other.write_text(SMALL.replace("grasps_per_pose = 16", "grasps_per_pose = 17"))
+    before = files(single_machine)
+    with pytest.raises(mvgrasp.MvGraspError, match="another config"):
+        grasp_dataset.generate_shard(single_machine, 1, other, categories=CATEGORIES)
+    with pytest.raises(mvgrasp.MvGraspError, match="another config"):
+        grasp_dataset.write_manifest(single_machine, other, categories=CATEGORIES)
+    assert files(single_machine) == before
+
+
 def test_bad_requests_raise_with_the_file_named(tmp_path: Path) -> None:
     bad = tmp_path / "bad.toml"
     bad.write_text("grasps_per_pose = 0\n")

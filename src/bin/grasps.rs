@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use clap::Parser;
 use mvgrasp::cli::ObjectArgs;
-use mvgrasp::geometry::{StablePoseParams, stable_poses};
+use mvgrasp::geometry::RestingPoses;
 use mvgrasp::grasp::physics::PhysicsParams;
 use mvgrasp::grasp::{AnalysisConfig, GraspObject, Gripper, GripperPreset, analyse};
 use mvgrasp::grasp_image::write_grasp_picture;
@@ -29,8 +29,9 @@ struct Args {
     /// Gripper: a preset (panda, yumi, robotiq_2f_85) or a .toml/.json file.
     #[arg(long, default_value = "panda")]
     gripper: String,
-    /// Stable pose to rest the object in (index in the stable-pose list). Default: the most
-    /// probable pose that is not marginal.
+    /// The pose to rest the object in, among those offered (the same list as `plan
+    /// --stable-pose`): 0, the default, is the most probable that is not marginal (a marginal
+    /// one for an object with no other).
     #[arg(long)]
     pose: Option<usize>,
     /// Skip the physics trials.
@@ -100,24 +101,12 @@ fn run(args: &Args) -> Result<(), String> {
     let config = load_config(args)?;
     let loaded = args.object.load()?;
     let name = &loaded.display_name;
-    let poses =
-        stable_poses(&loaded.mesh, &StablePoseParams::default()).map_err(|e| e.to_string())?;
-    let pose_index = match args.pose {
-        Some(k) if k < poses.len() => k,
-        Some(k) => {
-            return Err(format!(
-                "--pose {k}: {name} has {} stable poses (0..{})",
-                poses.len(),
-                poses.len().saturating_sub(1)
-            ));
-        }
-        None => poses.iter().position(|p| !p.marginal).ok_or_else(|| {
-            format!(
-                "{name}: every stable pose is marginal (it rolls or topples); pass --pose K to plan on one anyway"
-            )
-        })?,
-    };
-    let pose = &poses[pose_index];
+    let rest = RestingPoses::of(&loaded.mesh).map_err(|e| e.to_string())?;
+    let k = args.pose.unwrap_or(0);
+    let (pose_index, pose) = rest.get(k).map_err(|e| format!("--pose {k}: {e}"))?;
+    if rest.only_marginal() {
+        eprintln!("{name}: every stable pose is marginal (it rolls or topples): resting it in one");
+    }
     let object = GraspObject::new(loaded.mesh).map_err(|e| e.to_string())?;
     let analysis = analyse(
         &object,

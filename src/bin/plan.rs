@@ -42,7 +42,9 @@ struct Args {
     /// multi-view GQ-CNN (the middle of what each was trained on).
     #[arg(long)]
     distance_m: Option<f32>,
-    /// The stable pose to rest the object in: 0 is the most probable that is not marginal.
+    /// The pose to rest the object in, among those offered (the same list as `grasps --pose`):
+    /// 0 is the most probable that is not marginal (a marginal one for an object with no
+    /// other).
     #[arg(long, default_value_t = 0)]
     stable_pose: usize,
     /// Skip the physics trial of the chosen grasp.

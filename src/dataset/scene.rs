@@ -1,7 +1,7 @@
 //! An object resting on a table, coloured as the seed paper does: random per-vertex or per-face
 //! colours, one colouring for the training views and a novel one for the test views.
 
-use mvgrasp_geometry::{Pose3, StablePoseParams, TriangleMesh, stable_poses};
+use mvgrasp_geometry::{Pose3, RestingPoses, TriangleMesh};
 pub use mvgrasp_planner::seed::{name_hash, splitmix};
 use mvgrasp_render::{Colors, IDENTITY, MeshInput, Sides, random_colors};
 use serde::Serialize;
@@ -53,21 +53,7 @@ impl PlacedObject {
     /// # Errors
     /// A geometry error when the mesh has no stable pose (flat meshes).
     pub fn new(mesh: TriangleMesh, seed: u64) -> Result<Self> {
-        let params = StablePoseParams {
-            min_probability: 0.0,
-            ..Default::default()
-        };
-        let poses = stable_poses(&mesh, &params)?;
-        let pose = poses
-            .iter()
-            .find(|p| !p.marginal)
-            .or(poses.first())
-            .copied()
-            .ok_or_else(|| mvgrasp_geometry::GeometryError::Degenerate {
-                op: "place on table",
-                detail: "the object has no stable pose".into(),
-                path: mesh.origin().to_path_buf(),
-            })?;
+        let (_, &pose) = RestingPoses::of(&mesh)?.get(0)?;
         let color_mode = if splitmix(seed) & 1 == 0 {
             ColorMode::PerVertex
         } else {

@@ -140,6 +140,37 @@ impl DatasetPlan {
         })
     }
 
+    /// A hash of the config and the object list (FNV-1a of their JSON, hex): every shard
+    /// records it, and a shard made with another is refused.
+    pub fn hash(&self) -> String {
+        let objects: Vec<&ManifestObject> = self.objects.iter().map(|(o, _)| o).collect();
+        let text = serde_json::to_string(&(&self.config, objects)).unwrap_or_default();
+        format!("{:016x}", name_hash(&text))
+    }
+
+    /// The record of shard `index` when it is finished in `out` and made by this plan.
+    ///
+    /// # Errors
+    /// [`Error::Config`] when a finished shard there was made with another config or other
+    /// objects (or by a version of mvgrasp that did not record it).
+    fn finished(&self, out: &Path, index: usize) -> Result<Option<ShardRecord>> {
+        let Some(record) = finished_shard(out, index) else {
+            return Ok(None);
+        };
+        if record.plan_hash != self.hash() {
+            return Err(Error::Config {
+                detail: format!(
+                    "shard {index} was made with another config or other objects (plan hash \
+                     {:?}, this one {:?}); use another folder or delete it",
+                    record.plan_hash,
+                    self.hash()
+                ),
+                path: out.join(shard::shard_file(index)),
+            });
+        }
+        Ok(Some(record))
+    }
+
     /// How many shards the objects make.
     pub fn num_shards(&self) -> usize {
         self.objects.len().div_ceil(self.config.objects_per_shard)
@@ -165,11 +196,13 @@ impl DatasetPlan {
     /// Writes the manifest from the shards finished in `out`; returns it.
     ///
     /// # Errors
-    /// [`Error::Io`] when it cannot be written.
+    /// [`Error::Io`] when it cannot be written; [`Error::Config`] when a finished shard there
+    /// was made with another config or other objects.
     pub fn write_manifest(&self, out: &Path) -> Result<Manifest> {
-        let shards = (0..self.num_shards())
-            .filter_map(|i| finished_shard(out, i))
-            .collect();
+        let mut shards = Vec::new();
+        for i in 0..self.num_shards() {
+            shards.extend(self.finished(out, i)?);
+        }
         self.write_manifest_of(out, shards)
     }
 
@@ -228,7 +261,7 @@ pub fn generate_shard(
             ),
         });
     }
-    if let Some(record) = finished_shard(out, index) {
+    if let Some(record) = plan.finished(out, index)? {
         return Ok(record);
     }
     std::fs::create_dir_all(out).map_err(Error::io("create", out))?;
@@ -265,6 +298,7 @@ fn make_shard(
         index,
         file: shard::shard_file(index),
         objects: objects.iter().map(|(o, _)| o.id).collect(),
+        plan_hash: plan.hash(),
         ..ShardRecord::default()
     };
     let mut points = Vec::new();
@@ -313,7 +347,7 @@ pub fn generate(
     let mut shards = Vec::with_capacity(plan.num_shards());
     let mut datapoints = 0;
     for index in 0..plan.num_shards() {
-        let record = match finished_shard(out, index) {
+        let record = match plan.finished(out, index)? {
             Some(record) => {
                 summary.skipped += 1;
                 record
@@ -413,6 +447,28 @@ fn unique_names(sources: &[ObjectSource]) -> Result<Vec<String>> {
 mod tests {
     use super::*;
     use std::path::PathBuf;
+
+    #[test]
+    fn the_plan_hash_changes_with_the_config_and_the_objects() {
+        let sources = |names: &[&str]| -> Vec<ObjectSource> {
+            names
+                .iter()
+                .map(|f| ObjectSource::File(PathBuf::from(f)))
+                .collect()
+        };
+        let config = GraspDatasetConfig::default();
+        let plan = DatasetPlan::new(&sources(&["a.obj", "b.obj"]), &config).unwrap();
+        let same = DatasetPlan::new(&sources(&["a.obj", "b.obj"]), &config).unwrap();
+        assert_eq!(plan.hash(), same.hash());
+        let other_objects = DatasetPlan::new(&sources(&["a.obj", "c.obj"]), &config).unwrap();
+        assert_ne!(plan.hash(), other_objects.hash());
+        let other_config = GraspDatasetConfig {
+            grasps_per_pose: config.grasps_per_pose + 1,
+            ..config.clone()
+        };
+        let changed = DatasetPlan::new(&sources(&["a.obj", "b.obj"]), &other_config).unwrap();
+        assert_ne!(plan.hash(), changed.hash());
+    }
 
     #[test]
     fn repeated_stems_are_told_apart_by_extension_then_folders() {

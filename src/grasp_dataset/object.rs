@@ -1,7 +1,7 @@
 //! The datapoints of one object: its stable poses, antipodal axes scored once per pose, cameras
 //! that render its depth, and the grasps that approach along each view.
 
-use mvgrasp_geometry::{Pose3, StablePoseParams, TriangleMesh, Vec3, stable_poses};
+use mvgrasp_geometry::{Pose3, RestingPoses, TriangleMesh, Vec3};
 use mvgrasp_grasp::physics::{PhysicsObject, simulate_grasp};
 use mvgrasp_grasp::quality::{grasp_seed, robust_qualities};
 use mvgrasp_grasp::{
@@ -58,17 +58,11 @@ pub(crate) fn object_datapoints(
     config: &GraspDatasetConfig,
     resolved: &Resolved,
 ) -> Result<Vec<Datapoint>> {
-    let poses = {
-        let params = StablePoseParams {
-            min_probability: 0.0,
-            ..Default::default()
-        };
-        let all = stable_poses(mesh, &params)?;
-        let steady: Vec<_> = all.iter().filter(|p| !p.marginal).copied().collect();
-        let mut chosen = if steady.is_empty() { all } else { steady };
-        chosen.truncate(config.stable_poses_per_object);
-        chosen
-    };
+    let poses: Vec<_> = RestingPoses::of(mesh)?
+        .iter()
+        .take(config.stable_poses_per_object)
+        .map(|(_, pose)| *pose)
+        .collect();
     let object = GraspObject::new(mesh.clone())?;
     let physics_object = if config.physics_fraction > 0.0 {
         Some(PhysicsObject::from_grasp_object(

@@ -91,6 +91,11 @@ pub struct ShardRecord {
     pub counts: Counts,
     /// Objects that gave no datapoint, with the reason.
     pub empty_objects: Vec<(u32, String)>,
+    /// The hash of the config and object list that made it ([`super::DatasetPlan::hash`]):
+    /// a rerun into the folder with another config refuses the shard instead of reusing it.
+    /// Empty in shards made before it was recorded.
+    #[serde(default)]
+    pub plan_hash: String,
 }
 
 /// What a set of datapoints holds; summed over shards for a dataset's totals.

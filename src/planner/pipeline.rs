@@ -4,8 +4,7 @@
 use std::time::Instant;
 
 use mvgrasp_geometry::{
-    Camera, HemisphereLayout, Intrinsics, IntrinsicsPreset, Pose3, StablePoseParams, TriangleMesh,
-    stable_poses,
+    Camera, HemisphereLayout, Intrinsics, IntrinsicsPreset, Pose3, RestingPoses, TriangleMesh,
 };
 use mvgrasp_grasp::physics::{PhysicsObject, PhysicsOutcome, simulate_grasp};
 use mvgrasp_grasp::quality::robust_qualities;
@@ -13,7 +12,7 @@ use mvgrasp_grasp::{GraspObject, PaperGrasp, check_collision};
 use mvgrasp_render::Renderer;
 use serde::Serialize;
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::grasp_dataset::GraspDatasetConfig;
 use crate::grasp_dataset::object::render_depths;
 use mvgrasp_planner::{GqcnnPolicy, ScoredGrasp, View, theta_rad};
@@ -27,8 +26,9 @@ pub struct PlanParams {
     pub max_views: usize,
     /// Camera intrinsics.
     pub intrinsics: Intrinsics,
-    /// Which stable pose the object rests in: an index into its non-marginal poses, most
-    /// probable first.
+    /// Which pose the object rests in: an index into its offered resting poses
+    /// ([`RestingPoses`]: the non-marginal ones, most probable first; the marginal ones for an
+    /// object that has no other).
     pub stable_pose: usize,
     /// Seeds the cameras and the sampler.
     pub seed: u64,
@@ -132,29 +132,8 @@ pub fn plan_grasp(
     policy: &GqcnnPolicy,
     params: &PlanParams,
 ) -> Result<PlanReport> {
-    let all = stable_poses(
-        mesh,
-        &StablePoseParams {
-            min_probability: 0.0,
-            ..Default::default()
-        },
-    )?;
-    let steady: Vec<usize> = (0..all.len()).filter(|&i| !all[i].marginal).collect();
-    let candidates = if steady.is_empty() {
-        (0..all.len()).collect()
-    } else {
-        steady
-    };
-    let &pose_index = candidates
-        .get(params.stable_pose)
-        .ok_or_else(|| Error::Planner {
-            detail: format!(
-                "stable pose {} asked for, the object has {} that are not marginal",
-                params.stable_pose,
-                candidates.len()
-            ),
-        })?;
-    let pose = all[pose_index];
+    let rest = RestingPoses::of(mesh)?;
+    let (pose_index, &pose) = rest.get(params.stable_pose)?;
     let table_from_object = pose.table_from_object;
     let object = GraspObject::new(mesh.clone())?;
     let target = table_from_object.transform_point(object.center_of_mass());

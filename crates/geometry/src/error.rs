@@ -154,6 +154,20 @@ pub enum GeometryError {
         /// What would be valid.
         expected: &'static str,
     },
+    /// A resting pose past the list the object offers (see [`crate::RestingPoses`]).
+    #[error(
+        "resting pose {asked} asked for: the object offers {offered} (its stable poses that \
+         neither roll nor topple, or its marginal ones when it has none), 0 to {last} ({path})",
+        last = offered.saturating_sub(1)
+    )]
+    NoSuchPose {
+        /// The pose asked for.
+        asked: usize,
+        /// How many are offered.
+        offered: usize,
+        /// The mesh's origin.
+        path: PathBuf,
+    },
     /// A geometric computation has no answer for this input (flat or degenerate shapes).
     #[error("{op}: {detail} ({path})")]
     Degenerate {

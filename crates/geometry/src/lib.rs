@@ -6,6 +6,7 @@ pub mod mesh;
 pub mod objects;
 pub mod properties;
 pub mod raycast;
+pub mod resting;
 pub mod stable_poses;
 pub mod views;
 
@@ -21,5 +22,6 @@ pub use objects::{Category, GeneratedObject, MarchingParams, ObjectSpec, default
 pub use parry3d::math::{Mat3, Pose3, Rot3, Vec3};
 pub use properties::{DecompositionParams, MassFacts, Topology};
 pub use raycast::{RayCaster, RayHit};
+pub use resting::RestingPoses;
 pub use stable_poses::{StablePose, StablePoseParams, stable_poses};
 pub use views::HemisphereLayout;

@@ -70,7 +70,8 @@ pub struct StablePose {
     /// Smallest rotation that tips the object into another pose, radians (see the module docs).
     pub tipping_angle_rad: f32,
     /// True when the pose only looks stable: a curved face that rolls, or a narrow base that
-    /// topples at a touch. Plan and label no grasps in such poses.
+    /// topples at a touch. [`crate::RestingPoses`] offers such poses only for an object that
+    /// has no other.
     pub marginal: bool,
 }
 

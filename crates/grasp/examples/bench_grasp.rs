@@ -10,7 +10,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use mvgrasp_geometry::objects::default_object;
-use mvgrasp_geometry::{StablePoseParams, TriangleMesh, load_mesh, stable_poses};
+use mvgrasp_geometry::{RestingPoses, TriangleMesh, load_mesh};
 use mvgrasp_grasp::physics::{FailureStage, PhysicsObject, PhysicsParams, simulate_grasp};
 use mvgrasp_grasp::quality::{RobustQualityParams, robust_qualities};
 use mvgrasp_grasp::{Grasp, GraspObject, Gripper, SamplingParams, sample_antipodal};
@@ -42,13 +42,8 @@ fn run() -> Result<(), String> {
     println!("|---|---|---|---|---|---|---|---|");
     for (name, mesh) in meshes {
         let triangles = mesh.triangles().len();
-        let poses = stable_poses(&mesh, &StablePoseParams::default()).map_err(|e| e.to_string())?;
-        let pose = poses
-            .iter()
-            .find(|p| !p.marginal)
-            .or(poses.first())
-            .ok_or("no stable pose")?
-            .table_from_object;
+        let rest = RestingPoses::of(&mesh).map_err(|e| e.to_string())?;
+        let pose = rest.get(0).map_err(|e| e.to_string())?.1.table_from_object;
         let object = GraspObject::new(mesh).map_err(|e| e.to_string())?;
         let physics_object = PhysicsObject::from_grasp_object(&object, &Default::default())
             .map_err(|e| e.to_string())?;
