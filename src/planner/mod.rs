@@ -8,4 +8,7 @@ pub use mvgrasp_planner::{
     DepthImage, GqcnnPolicy, ImageSamplerParams, Plan, ScoredGrasp, ShippedModel, View,
     ViewSetting, models, sample_image_grasps,
 };
-pub use pipeline::{PlanParams, PlanReport, PlanTimings, plan_grasp};
+pub use pipeline::{
+    AnalyticCheck, PlanParams, PlanReport, PlanTimings, Scene, check_grasp, plan_grasp,
+    render_scene,
+};

@@ -15,7 +15,7 @@ use serde::Serialize;
 use crate::error::Result;
 use crate::grasp_dataset::GraspDatasetConfig;
 use crate::grasp_dataset::object::render_depths;
-use mvgrasp_planner::{GqcnnPolicy, ScoredGrasp, View, theta_rad};
+use mvgrasp_planner::{GqcnnPolicy, ScoredGrasp, View};
 
 /// What [`plan_grasp`] does.
 #[derive(Clone, Debug)]
@@ -121,8 +121,107 @@ pub struct PlanTimings {
     pub check_s: f64,
 }
 
-/// Rests `mesh` on a table in a stable pose, renders the views' depth, plans with `policy`,
-/// and checks the best grasp.
+/// An object at rest on the table and the views of it the planner looks through: the first
+/// stage of [`plan_grasp`], and what a depth sensor (or a depth predictor) gives instead.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// The offered resting pose used (index into all the object's stable poses).
+    pub stable_pose: usize,
+    /// Its probability.
+    pub stable_pose_probability: f32,
+    /// Where the object rests: the table (world) frame from the object's.
+    pub table_from_object: Pose3,
+    /// The views, each a camera and its depth image.
+    pub views: Vec<View>,
+}
+
+/// Rests `object` on the table in the offered pose `params.stable_pose` and renders the depth
+/// of `params`' views of it, looking at its centre of mass.
+///
+/// # Errors
+/// An object with no such pose, or a renderer error.
+pub fn render_scene(
+    renderer: &Renderer,
+    object: &GraspObject,
+    params: &PlanParams,
+) -> Result<Scene> {
+    let mesh = object.mesh();
+    let rest = RestingPoses::of(mesh)?;
+    let (pose_index, &pose) = rest.get(params.stable_pose)?;
+    let table_from_object = pose.table_from_object;
+    let target = table_from_object.transform_point(object.center_of_mass());
+    let mut cameras = params
+        .views
+        .cameras(params.intrinsics, target, params.seed)?;
+    cameras.truncate(params.max_views.max(1));
+    let depths = render_depths(renderer, mesh, &table_from_object, &cameras)?;
+    let views = cameras
+        .into_iter()
+        .zip(depths)
+        .enumerate()
+        .map(|(i, (camera, depth))| View::new(i, camera, depth))
+        .collect::<mvgrasp_planner::Result<Vec<_>>>()?;
+    Ok(Scene {
+        stable_pose: pose_index,
+        stable_pose_probability: pose.probability,
+        table_from_object,
+        views,
+    })
+}
+
+/// Checks `grasp` on `object` at `table_from_object`: the grasp dataset's label (robust
+/// Ferrari-Canny and collision) and, when `params.physics`, a rapier trial.
+///
+/// # Errors
+/// An object the checks cannot use, or bad label settings.
+pub fn check_grasp(
+    object: &GraspObject,
+    table_from_object: &Pose3,
+    grasp: &ScoredGrasp,
+    params: &PlanParams,
+) -> Result<(AnalyticCheck, Option<PhysicsOutcome>)> {
+    let gripper = params.labels.gripper()?;
+    let object_from_gripper = table_from_object.inverse() * grasp.grasp.world_from_gripper;
+    let quality = robust_qualities(
+        object,
+        &[object_from_gripper],
+        &gripper,
+        &params.labels.quality,
+        params.seed,
+    )?[0];
+    let collision_free = check_collision(
+        object,
+        &gripper,
+        &object_from_gripper,
+        Some(table_from_object),
+        &params.labels.sampling.collision,
+    )
+    .is_free();
+    let analytic = AnalyticCheck {
+        robust_epsilon: quality.robust_epsilon,
+        collision_free,
+        robust: params
+            .labels
+            .quality
+            .dexnet_label(quality.robust_epsilon, collision_free),
+    };
+    let physics = if params.physics {
+        let physics_object = PhysicsObject::from_grasp_object(object, &Default::default())?;
+        Some(simulate_grasp(
+            &physics_object,
+            table_from_object,
+            &grasp.grasp,
+            &gripper,
+            &params.labels.physics,
+        )?)
+    } else {
+        None
+    };
+    Ok((analytic, physics))
+}
+
+/// The main job in its three stages: [`render_scene`] (the object at rest and the views' depth),
+/// the policy's plan over the views, and [`check_grasp`] on the best grasp.
 ///
 /// # Errors
 /// An object with no stable pose, or an error of the renderer, the network or the checks.
@@ -132,87 +231,41 @@ pub fn plan_grasp(
     policy: &GqcnnPolicy,
     params: &PlanParams,
 ) -> Result<PlanReport> {
-    let rest = RestingPoses::of(mesh)?;
-    let (pose_index, &pose) = rest.get(params.stable_pose)?;
-    let table_from_object = pose.table_from_object;
     let object = GraspObject::new(mesh.clone())?;
-    let target = table_from_object.transform_point(object.center_of_mass());
-    let mut cameras = params
-        .views
-        .cameras(params.intrinsics, target, params.seed)?;
-    cameras.truncate(params.max_views.max(1));
-
     let started = Instant::now();
-    let depths = render_depths(renderer, mesh, &table_from_object, &cameras)?;
+    let scene = render_scene(renderer, &object, params)?;
     let render_s = started.elapsed().as_secs_f64();
 
     let started = Instant::now();
-    let views = cameras
-        .iter()
-        .zip(depths)
-        .enumerate()
-        .map(|(i, (camera, depth))| View::new(i, *camera, depth))
-        .collect::<mvgrasp_planner::Result<Vec<_>>>()?;
-    let plan = policy.plan(&views, params.seed)?;
+    let plan = policy.plan(&scene.views, params.seed)?;
     let plan_s = started.elapsed().as_secs_f64();
 
     let started = Instant::now();
     let best = plan.best().copied();
-    let gripper = params.labels.gripper()?;
-    let mut analytic = None;
-    let mut physics = None;
-    if let Some(best) = &best {
-        let object_from_gripper = table_from_object.inverse() * best.grasp.world_from_gripper;
-        let quality = robust_qualities(
-            &object,
-            &[object_from_gripper],
-            &gripper,
-            &params.labels.quality,
-            params.seed,
-        )?[0];
-        let collision_free = check_collision(
-            &object,
-            &gripper,
-            &object_from_gripper,
-            Some(&table_from_object),
-            &params.labels.sampling.collision,
-        )
-        .is_free();
-        analytic = Some(AnalyticCheck {
-            robust_epsilon: quality.robust_epsilon,
-            collision_free,
-            robust: params
-                .labels
-                .quality
-                .dexnet_label(quality.robust_epsilon, collision_free),
-        });
-        if params.physics {
-            let physics_object = PhysicsObject::from_grasp_object(&object, &Default::default())?;
-            physics = Some(simulate_grasp(
-                &physics_object,
-                &table_from_object,
-                &best.grasp,
-                &gripper,
-                &params.labels.physics,
-            )?);
+    let (analytic, physics) = match &best {
+        Some(best) => {
+            let (analytic, physics) = check_grasp(&object, &scene.table_from_object, best, params)?;
+            (Some(analytic), physics)
         }
-    }
+        None => (None, None),
+    };
     let check_s = started.elapsed().as_secs_f64();
-    let views = cameras
+    let views = scene
+        .views
         .iter()
         .enumerate()
-        .map(|(i, camera)| ViewSummary {
-            elevation_deg: theta_rad(camera).to_degrees(),
+        .map(|(i, view)| ViewSummary {
+            elevation_deg: view.theta_rad().to_degrees(),
             candidates: plan.candidates_per_view[i],
             best_quality: plan.best_in_view(i).map(|c| c.quality),
         })
         .collect();
     Ok(PlanReport {
-        stable_pose: pose_index,
-        stable_pose_probability: pose.probability,
+        stable_pose: scene.stable_pose,
+        stable_pose_probability: scene.stable_pose_probability,
         views,
-        cameras,
-        table_from_object,
+        cameras: scene.views.iter().map(|v| v.camera).collect(),
+        table_from_object: scene.table_from_object,
         best_paper: best.map(|b| b.grasp.to_paper()),
         best,
         top: plan.candidates.iter().take(10).copied().collect(),
