@@ -33,9 +33,9 @@ pub struct InputContract {
 
 impl InputContract {
     /// The contract of `net`: the one its export recorded, else the grasp datasets' defaults
-    /// (Dex-Net 2.0's 96-pixel window scaled to the network's crop side, on the PhoXi S at
-    /// fx = 552.5; cameras 0.65 to 0.75 m away for a top-down network, 0.5 to 0.75 m for a
-    /// multi-view one).
+    /// (Dex-Net 2.0's 96-pixel window scaled to 32 x 32, on the PhoXi S at fx = 552.5; cameras
+    /// 0.65 to 0.75 m away for a top-down network, 0.5 to 0.75 m for a multi-view one), which
+    /// a network taking other crops does not fit.
     pub fn of(net: &Gqcnn) -> Self {
         let arch = net.architecture();
         match net.input_spec() {
@@ -49,10 +49,7 @@ impl InputContract {
                 recorded: true,
             },
             None => Self {
-                crop: CropParams {
-                    size_px: arch.image_size_px as u32,
-                    ..CropParams::default()
-                },
+                crop: CropParams::default(),
                 focal_px: Intrinsics::preset(mvgrasp_geometry::IntrinsicsPreset::PhoxiS).fx,
                 camera_distance_m: if arch.pose_inputs >= 2 {
                     [0.5, 0.75]
