@@ -3,11 +3,15 @@
 use std::path::PathBuf;
 
 use mvgrasp::cli::LibraryArgs;
-use mvgrasp::grasp_dataset::{DatasetPlan, GraspDatasetConfig, generate_shard};
+use mvgrasp::dataset::ObjectSource;
+use mvgrasp::grasp_dataset::{
+    DatasetPlan, GraspDatasetConfig, generate, generate_shard, read_manifest,
+};
 use mvgrasp::render::{Backend, Renderer};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
+use crate::convert::to_python;
 use crate::errors::pipeline_error;
 
 /// The plan of a dataset: its config (a TOML file, or the defaults) and objects (mesh files or
@@ -19,6 +23,18 @@ fn plan(
     categories: Option<Vec<String>>,
     library_seed: u64,
 ) -> PyResult<DatasetPlan> {
+    let (sources, config) = inputs(config, meshes, per_category, categories, library_seed)?;
+    DatasetPlan::new(&sources, &config).map_err(pipeline_error)
+}
+
+/// The objects and the config of a dataset.
+fn inputs(
+    config: Option<PathBuf>,
+    meshes: Option<Vec<PathBuf>>,
+    per_category: u32,
+    categories: Option<Vec<String>>,
+    library_seed: u64,
+) -> PyResult<(Vec<ObjectSource>, GraspDatasetConfig)> {
     let config = match config {
         Some(path) => GraspDatasetConfig::from_file(&path).map_err(pipeline_error)?,
         None => GraspDatasetConfig::default(),
@@ -35,7 +51,15 @@ fn plan(
         library_seed,
     };
     let sources = library.sources().map_err(PyValueError::new_err)?;
-    DatasetPlan::new(&sources, &config).map_err(pipeline_error)
+    Ok((sources, config))
+}
+
+fn renderer_backend(backend: &str) -> PyResult<Backend> {
+    Backend::parse(backend).ok_or_else(|| {
+        PyValueError::new_err(format!(
+            "unknown backend {backend:?} (expected auto, vulkan, gl, metal, dx12)"
+        ))
+    })
 }
 
 /// How many shards the dataset has.
@@ -51,12 +75,12 @@ pub(crate) fn grasp_dataset_num_shards(
     Ok(plan(config, meshes, per_category, categories, library_seed)?.num_shards())
 }
 
-/// Makes shard `shard` in `out` (skipped when finished); its record as JSON text.
+/// Makes shard `shard` in `out` (skipped when finished); its record.
 #[pyfunction]
 #[pyo3(signature = (out, shard, config = None, meshes = None, per_category = 1, categories = None, library_seed = 0, backend = "auto"))]
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn generate_grasp_shard(
-    py: Python<'_>,
+pub(crate) fn generate_grasp_shard<'py>(
+    py: Python<'py>,
     out: PathBuf,
     shard: usize,
     config: Option<PathBuf>,
@@ -65,13 +89,9 @@ pub(crate) fn generate_grasp_shard(
     categories: Option<Vec<String>>,
     library_seed: u64,
     backend: &str,
-) -> PyResult<String> {
+) -> PyResult<Bound<'py, PyAny>> {
     let plan = plan(config, meshes, per_category, categories, library_seed)?;
-    let backend = Backend::parse(backend).ok_or_else(|| {
-        PyValueError::new_err(format!(
-            "unknown backend {backend:?} (expected auto, vulkan, gl, metal, dx12)"
-        ))
-    })?;
+    let backend = renderer_backend(backend)?;
     let record = py.detach(|| -> mvgrasp::Result<_> {
         std::fs::create_dir_all(&out).map_err(|source| mvgrasp::Error::Io {
             op: "create",
@@ -81,11 +101,10 @@ pub(crate) fn generate_grasp_shard(
         let renderer = Renderer::new(backend)?;
         generate_shard(&renderer, &plan, &out, shard)
     });
-    let record = record.map_err(pipeline_error)?;
-    serde_json::to_string(&record).map_err(|e| PyValueError::new_err(e.to_string()))
+    to_python(py, &record.map_err(pipeline_error)?)
 }
 
-/// Writes `out/dataset.json` from the shards finished there; the manifest as JSON text.
+/// Writes `out/dataset.json` from the shards finished there; the manifest.
 #[pyfunction]
 #[pyo3(signature = (out, config = None, meshes = None, per_category = 1, categories = None, library_seed = 0))]
 pub(crate) fn write_grasp_manifest(
@@ -96,10 +115,38 @@ pub(crate) fn write_grasp_manifest(
     per_category: u32,
     categories: Option<Vec<String>>,
     library_seed: u64,
-) -> PyResult<String> {
+) -> PyResult<Bound<'_, PyAny>> {
     let plan = plan(config, meshes, per_category, categories, library_seed)?;
     let manifest = py
         .detach(|| plan.write_manifest(&out))
         .map_err(pipeline_error)?;
-    serde_json::to_string(&manifest).map_err(|e| PyValueError::new_err(e.to_string()))
+    to_python(py, &manifest)
+}
+
+/// Makes every unfinished shard in `out` and the manifest, with the Rust generator's own loop
+/// (`mvgrasp::grasp_dataset::generate`: the same checks and bytes as the `grasp_dataset`
+/// command); the manifest.
+#[pyfunction]
+#[pyo3(signature = (out, config = None, meshes = None, per_category = 1, categories = None, library_seed = 0, backend = "auto"))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn generate_grasp_dataset<'py>(
+    py: Python<'py>,
+    out: PathBuf,
+    config: Option<PathBuf>,
+    meshes: Option<Vec<PathBuf>>,
+    per_category: u32,
+    categories: Option<Vec<String>>,
+    library_seed: u64,
+    backend: &str,
+) -> PyResult<Bound<'py, PyAny>> {
+    let (sources, config) = inputs(config, meshes, per_category, categories, library_seed)?;
+    let backend = renderer_backend(backend)?;
+    let manifest = py
+        .detach(|| -> mvgrasp::Result<_> {
+            let renderer = Renderer::new(backend)?;
+            generate(&renderer, &sources, &config, &out, false)?;
+            read_manifest(&out)
+        })
+        .map_err(pipeline_error)?;
+    to_python(py, &manifest)
 }

@@ -8,6 +8,7 @@
 //! deprecated `extension-module` feature is therefore not used. The crate is not in the
 //! workspace's `default-members`, so a bare `cargo build` / `cargo test` needs no Python.
 
+mod convert;
 mod errors;
 mod grasp_dataset;
 mod mesh;
@@ -21,7 +22,8 @@ mod native {
     use crate::errors::{CameraError, MeshError, MvGraspError, WeightsError};
     #[pymodule_export]
     use crate::grasp_dataset::{
-        generate_grasp_shard, grasp_dataset_num_shards, write_grasp_manifest,
+        generate_grasp_dataset, generate_grasp_shard, grasp_dataset_num_shards,
+        write_grasp_manifest,
     };
     #[pymodule_export]
     use crate::mesh::load_mesh;

@@ -1,6 +1,7 @@
 """Type stubs of the native module ``mvgrasp._native`` (built from py/src by maturin)."""
 
 import os
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -52,8 +53,8 @@ def generate_grasp_shard(
     categories: list[str] | None = None,
     library_seed: int = 0,
     backend: str = "auto",
-) -> str:
-    """Makes one shard (skipped when finished); its record as JSON text."""
+) -> dict[str, Any]:
+    """Makes one shard (skipped when finished); its record."""
 
 def write_grasp_manifest(
     out: str,
@@ -62,5 +63,17 @@ def write_grasp_manifest(
     per_category: int = 1,
     categories: list[str] | None = None,
     library_seed: int = 0,
-) -> str:
-    """Writes ``out/dataset.json`` from the finished shards; the manifest as JSON text."""
+) -> dict[str, Any]:
+    """Writes ``out/dataset.json`` from the finished shards; the manifest."""
+
+def generate_grasp_dataset(
+    out: str,
+    config: str | None = None,
+    meshes: list[str] | None = None,
+    per_category: int = 1,
+    categories: list[str] | None = None,
+    library_seed: int = 0,
+    backend: str = "auto",
+) -> dict[str, Any]:
+    """Makes every unfinished shard and the manifest with the Rust generator's loop; the
+    manifest."""

@@ -1,7 +1,8 @@
 """Grasp datasets: labelled grasp crops as safetensors shards with a JSON manifest.
 
-The Rust generator does the work; these functions make one shard, count the shards, and write
-the manifest, so that shards can be spread over processes or machines
+The Rust generator does the work; these functions make the whole dataset (the generator's own
+loop), or one shard, count the shards, and write the manifest, so that shards can be spread
+over processes or machines
 (:mod:`mvgrasp.ray_launcher`). Every shard depends only on the config and the object list, so
 any split of the shards writes the same bytes as one machine making them all.
 
@@ -11,7 +12,6 @@ library (``per_category`` objects of each of ``categories``, default all).
 
 from __future__ import annotations
 
-import json
 import os
 from collections.abc import Sequence
 from typing import Any, Optional, Union
@@ -63,14 +63,13 @@ def generate_shard(
 ) -> dict[str, Any]:
     """Makes shard ``shard`` in ``out`` (skipped when already finished); returns its record
     (object ids, datapoints, positives, physics counts). The GIL is released while it runs."""
-    text = _native.generate_grasp_shard(
+    return _native.generate_grasp_shard(
         os.fspath(out),
         shard,
         None if config is None else os.fspath(config),
         backend=backend,
         **objects_arguments(meshes, per_category, categories, library_seed),
     )
-    return json.loads(text)
 
 
 def write_manifest(
@@ -82,12 +81,11 @@ def write_manifest(
     library_seed: int = 0,
 ) -> dict[str, Any]:
     """Writes ``out/dataset.json`` from the shards finished in ``out``; returns it."""
-    text = _native.write_grasp_manifest(
+    return _native.write_grasp_manifest(
         os.fspath(out),
         None if config is None else os.fspath(config),
         **objects_arguments(meshes, per_category, categories, library_seed),
     )
-    return json.loads(text)
 
 
 def generate(
@@ -97,9 +95,15 @@ def generate(
     per_category: int = 1,
     categories: Optional[Sequence[str]] = None,
     library_seed: int = 0,
+    backend: str = "auto",
 ) -> dict[str, Any]:
-    """Makes every shard on this machine, one after another; returns the manifest."""
-    objects = objects_arguments(meshes, per_category, categories, library_seed)
-    for shard in range(num_shards(config, **objects)):
-        generate_shard(out, shard, config, **objects)
-    return write_manifest(out, config, **objects)
+    """Makes every unfinished shard on this machine and the manifest, with the Rust
+    generator's loop (the checks and bytes of the ``grasp_dataset`` command: a folder holding a
+    dataset of another config is refused); returns the manifest. The GIL is released while it
+    runs."""
+    return _native.generate_grasp_dataset(
+        os.fspath(out),
+        None if config is None else os.fspath(config),
+        backend=backend,
+        **objects_arguments(meshes, per_category, categories, library_seed),
+    )
