@@ -1,4 +1,5 @@
-//! The pipeline's error: whichever layer failed, with its message intact.
+//! The pipeline's error: whichever layer failed, with its message intact, or what went wrong in
+//! the root's own work (configs, datasets, files), with the values and the file named.
 
 use std::path::PathBuf;
 
@@ -32,26 +33,117 @@ pub enum Error {
         path: PathBuf,
     },
     /// An image could not be encoded.
-    #[error("{path}: cannot encode PNG: {detail}")]
+    #[error("{path}: cannot encode PNG: {source}")]
     Png {
-        /// What the encoder said.
-        detail: String,
+        /// The encoder's error.
+        source: png::EncodingError,
         /// The file.
         path: PathBuf,
     },
-    /// A config file cannot be used.
-    #[error("{path}: {detail}")]
-    Config {
+    /// A config file that cannot be used: the file, and what is wrong in it.
+    #[error("{path}: {source}")]
+    ConfigFile {
         /// What is wrong.
-        detail: String,
+        source: Box<Error>,
         /// The file.
         path: PathBuf,
     },
-    /// A dataset request makes no sense (duplicate names, nothing to do, ...).
-    #[error("dataset: {detail}")]
-    Dataset {
-        /// What is wrong.
-        detail: String,
+    /// A config that is not valid TOML of the expected shape (a syntax error, an unknown key,
+    /// a wrong type).
+    #[error("not a valid config: {source}")]
+    Toml {
+        /// The parser's error.
+        source: toml::de::Error,
+    },
+    /// A config value out of its range.
+    #[error("config key {key} = {value}: {expected}")]
+    ConfigValue {
+        /// The key.
+        key: &'static str,
+        /// Its value, printed.
+        value: String,
+        /// What would be valid.
+        expected: &'static str,
+    },
+    /// A JSON file (a manifest, a shard's record, a dataset's cameras) that cannot be read or
+    /// written.
+    #[error("{path}: cannot {op} the {what}: {source}")]
+    Json {
+        /// "read" or "write".
+        op: &'static str,
+        /// What the file holds.
+        what: &'static str,
+        /// The parser's error.
+        source: serde_json::Error,
+        /// The file.
+        path: PathBuf,
+    },
+    /// A safetensors shard that cannot be read or written.
+    #[error("{path}: cannot {op} the shard: {source}")]
+    Safetensors {
+        /// "read" or "write".
+        op: &'static str,
+        /// The library's error.
+        source: safetensors::SafeTensorError,
+        /// The file.
+        path: PathBuf,
+    },
+    /// A file of another format or version than the one expected.
+    #[error("{path}: format {found:?}, expected {expected:?}")]
+    Format {
+        /// The format the file names.
+        found: String,
+        /// The one expected.
+        expected: &'static str,
+        /// The file.
+        path: PathBuf,
+    },
+    /// A dataset asked of no objects.
+    #[error("dataset: no objects to make a dataset of")]
+    NoObjects,
+    /// Two objects of a dataset with one name.
+    #[error("dataset: two objects are named {name:?}; rename one file or list each file once")]
+    DuplicateObject {
+        /// The name.
+        name: String,
+    },
+    /// A shard index past the dataset.
+    #[error("dataset: shard {index} does not exist: the dataset has {num_shards}")]
+    NoSuchShard {
+        /// The index asked for.
+        index: usize,
+        /// Shards the dataset has.
+        num_shards: usize,
+    },
+    /// A folder that holds a dataset made with another config or other objects.
+    #[error(
+        "{path}: this folder holds a dataset made with another config or other objects; use \
+         another folder or delete it"
+    )]
+    ForeignDataset {
+        /// The dataset's manifest.
+        path: PathBuf,
+    },
+    /// A finished shard made with another config or other objects.
+    #[error(
+        "{path}: shard {index} was made with another config or other objects (plan hash \
+         {found:?}, this one {expected:?}); use another folder or delete it"
+    )]
+    ForeignShard {
+        /// The shard.
+        index: usize,
+        /// The hash it records (empty: made before hashes were recorded).
+        found: String,
+        /// This plan's hash.
+        expected: String,
+        /// The shard's file.
+        path: PathBuf,
+    },
+    /// A dataset with nothing to show.
+    #[error("{path}: the dataset has no datapoint to preview")]
+    EmptyDataset {
+        /// The dataset folder.
+        path: PathBuf,
     },
 }
 
@@ -63,6 +155,29 @@ impl Error {
     ) -> impl FnOnce(std::io::Error) -> Self {
         let path = path.to_path_buf();
         move |source| Self::Io { op, source, path }
+    }
+
+    /// An [`Error::Json`] reading or writing the `what` of `path`.
+    pub(crate) fn json(
+        op: &'static str,
+        what: &'static str,
+        path: &std::path::Path,
+    ) -> impl FnOnce(serde_json::Error) -> Self {
+        let path = path.to_path_buf();
+        move |source| Self::Json {
+            op,
+            what,
+            source,
+            path,
+        }
+    }
+
+    /// This error found in the config file `path` ([`Error::ConfigFile`]).
+    pub(crate) fn in_config(self, path: &std::path::Path) -> Self {
+        Self::ConfigFile {
+            source: Box::new(self),
+            path: path.to_path_buf(),
+        }
     }
 }
 

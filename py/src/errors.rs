@@ -5,12 +5,17 @@
 //! └── mvgrasp.MvGraspError
 //!     ├── mvgrasp.MeshError      a mesh file cannot be loaded or is not a usable mesh
 //!     ├── mvgrasp.CameraError    bad intrinsics or extrinsics
-//!     └── mvgrasp.WeightsError   a network's weights are missing or do not match
+//!     ├── mvgrasp.WeightsError   a network's weights are missing or do not match
+//!     ├── mvgrasp.RenderError    no graphics adapter, or rendering failed
+//!     ├── mvgrasp.PlanningError  depth images, views or a network the planner cannot use
+//!     └── mvgrasp.DatasetError   a dataset's config, folder, shards or manifest
 //! ```
 //!
-//! The message is always the Rust error's `Display` text, which names the file and the fault.
-//! A bad argument value (not a bad file) raises Python's own `ValueError`.
+//! The Rust error's variant decides the class (`pipeline_error`); the message is always its
+//! `Display` text, which names the file and the fault. A bad argument value (not a bad file)
+//! raises Python's own `ValueError`.
 
+use mvgrasp::Error;
 use mvgrasp_geometry::GeometryError;
 use pyo3::PyErr;
 use pyo3::create_exception;
@@ -41,6 +46,25 @@ create_exception!(
     "A network's weights are missing, unreadable or do not match its architecture."
 );
 
+create_exception!(
+    mvgrasp,
+    RenderError,
+    MvGraspError,
+    "No graphics adapter could be opened, or rendering failed."
+);
+create_exception!(
+    mvgrasp,
+    PlanningError,
+    MvGraspError,
+    "Depth images, views or a network that the planner cannot use."
+);
+create_exception!(
+    mvgrasp,
+    DatasetError,
+    MvGraspError,
+    "A dataset's config, folder, shards or manifest cannot be used; the message names the file."
+);
+
 /// Maps an error from loading a mesh: a bad argument is a `ValueError`, anything about the file
 /// is a `MeshError`.
 pub(crate) fn mesh_error(error: GeometryError) -> PyErr {
@@ -50,11 +74,26 @@ pub(crate) fn mesh_error(error: GeometryError) -> PyErr {
     }
 }
 
-/// Maps a pipeline error: meshes are `MeshError`, cameras `CameraError`, the rest
-/// `MvGraspError`; always with the Rust message.
-pub(crate) fn pipeline_error(error: mvgrasp::Error) -> PyErr {
+/// Maps a pipeline error onto the tree by its variant, always with the Rust message.
+pub(crate) fn pipeline_error(error: Error) -> PyErr {
+    let message = error.to_string();
     match error {
-        mvgrasp::Error::Geometry(e) => mesh_error(e),
-        other => MvGraspError::new_err(other.to_string()),
+        Error::Geometry(e) => mesh_error(e),
+        Error::Render(_) => RenderError::new_err(message),
+        Error::Infer(_) => WeightsError::new_err(message),
+        Error::Planning(_) => PlanningError::new_err(message),
+        Error::ConfigFile { .. }
+        | Error::Toml { .. }
+        | Error::ConfigValue { .. }
+        | Error::Json { .. }
+        | Error::Safetensors { .. }
+        | Error::Format { .. }
+        | Error::NoObjects
+        | Error::DuplicateObject { .. }
+        | Error::NoSuchShard { .. }
+        | Error::ForeignDataset { .. }
+        | Error::ForeignShard { .. }
+        | Error::EmptyDataset { .. } => DatasetError::new_err(message),
+        _ => MvGraspError::new_err(message),
     }
 }

@@ -19,7 +19,10 @@ mod native {
     use pyo3::prelude::*;
 
     #[pymodule_export]
-    use crate::errors::{CameraError, MeshError, MvGraspError, WeightsError};
+    use crate::errors::{
+        CameraError, DatasetError, MeshError, MvGraspError, PlanningError, RenderError,
+        WeightsError,
+    };
     #[pymodule_export]
     use crate::grasp_dataset::{
         generate_grasp_dataset, generate_grasp_shard, grasp_dataset_num_shards,

@@ -85,25 +85,27 @@ def test_a_shard_made_with_another_config_is_refused_not_reused(
     other = tmp_path / "other.toml"
     other.write_text(SMALL.replace("grasps_per_pose = 16", "grasps_per_pose = 17"))
     before = files(single_machine)
-    with pytest.raises(mvgrasp.MvGraspError, match="another config"):
+    with pytest.raises(mvgrasp.DatasetError, match="another config"):
         grasp_dataset.generate_shard(single_machine, 1, other, categories=CATEGORIES)
-    with pytest.raises(mvgrasp.MvGraspError, match="another config"):
+    with pytest.raises(mvgrasp.DatasetError, match="another config"):
         grasp_dataset.write_manifest(single_machine, other, categories=CATEGORIES)
+    with pytest.raises(mvgrasp.DatasetError, match="another config"):
+        grasp_dataset.generate(single_machine, other, categories=CATEGORIES)
     assert files(single_machine) == before
 
 
 def test_bad_requests_raise_with_the_file_named(tmp_path: Path) -> None:
     bad = tmp_path / "bad.toml"
     bad.write_text("grasps_per_pose = 0\n")
-    with pytest.raises(mvgrasp.MvGraspError, match="bad.toml"):
+    with pytest.raises(mvgrasp.DatasetError, match="bad.toml: config key grasps_per_pose = 0"):
         grasp_dataset.num_shards(bad)
     unknown = tmp_path / "unknown.toml"
     unknown.write_text("grasp_per_pose = 3\n")
-    with pytest.raises(mvgrasp.MvGraspError, match="unknown.toml"):
+    with pytest.raises(mvgrasp.DatasetError, match="unknown.toml: not a valid config"):
         grasp_dataset.num_shards(unknown)
     with pytest.raises(ValueError, match="nowhere.obj"):
         grasp_dataset.num_shards(meshes=[tmp_path / "nowhere.obj"])
-    with pytest.raises(mvgrasp.MvGraspError, match="does not exist"):
+    with pytest.raises(mvgrasp.DatasetError, match="does not exist"):
         grasp_dataset.generate_shard(tmp_path / "out", 7, categories=CATEGORIES)
 
 

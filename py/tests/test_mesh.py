@@ -61,7 +61,14 @@ def test_stub_lists_exactly_the_native_exports() -> None:
 
 def test_exception_tree() -> None:
     assert issubclass(mvgrasp.MvGraspError, Exception)
-    for error in (mvgrasp.MeshError, mvgrasp.CameraError, mvgrasp.WeightsError):
+    for error in (
+        mvgrasp.MeshError,
+        mvgrasp.CameraError,
+        mvgrasp.WeightsError,
+        mvgrasp.RenderError,
+        mvgrasp.PlanningError,
+        mvgrasp.DatasetError,
+    ):
         assert issubclass(error, mvgrasp.MvGraspError)
     assert mvgrasp.MeshError.__module__ == "mvgrasp"
 

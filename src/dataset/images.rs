@@ -58,8 +58,8 @@ fn encode(
     encoder.set_color(color);
     encoder.set_depth(depth);
     encoder.set_compression(png::Compression::Fast);
-    let png_error = |e: png::EncodingError| Error::Png {
-        detail: e.to_string(),
+    let png_error = |source: png::EncodingError| Error::Png {
+        source,
         path: path.to_path_buf(),
     };
     let mut writer = encoder.write_header().map_err(png_error)?;

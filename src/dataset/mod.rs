@@ -150,9 +150,7 @@ pub fn write_dataset(
     let mut names: Vec<String> = sources.iter().map(ObjectSource::name).collect();
     names.sort();
     if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
-        return Err(Error::Dataset {
-            detail: format!("two objects are named {:?}; rename one file", w[0]),
-        });
+        return Err(Error::DuplicateObject { name: w[0].clone() });
     }
     std::fs::create_dir_all(out).map_err(Error::io("create", out))?;
     let bar = if progress {
@@ -260,9 +258,7 @@ fn write_object(
 }
 
 fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
-    let text = serde_json::to_string_pretty(value).map_err(|e| Error::Dataset {
-        detail: format!("{}: {e}", path.display()),
-    })?;
+    let text = serde_json::to_string_pretty(value).map_err(Error::json("write", "JSON", path))?;
     std::fs::write(path, text + "\n").map_err(Error::io("write", path))
 }
 
@@ -275,10 +271,8 @@ fn write_json_atomically(path: &Path, value: &impl Serialize) -> Result<()> {
 /// The cameras of a dataset split, read back.
 ///
 /// # Errors
-/// [`Error::Io`] or [`Error::Dataset`] naming the file.
+/// [`Error::Io`] or [`Error::Json`] naming the file.
 pub fn read_cameras(path: &Path) -> Result<Vec<Camera>> {
     let text = std::fs::read_to_string(path).map_err(Error::io("read", path))?;
-    serde_json::from_str(&text).map_err(|e| Error::Dataset {
-        detail: format!("{}: {e}", path.display()),
-    })
+    serde_json::from_str(&text).map_err(Error::json("read", "JSON", path))
 }

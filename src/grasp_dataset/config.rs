@@ -160,29 +160,33 @@ impl GraspDatasetConfig {
     /// Reads a TOML config; keys not given keep their defaults.
     ///
     /// # Errors
-    /// [`Error::Config`] naming the file: unreadable, malformed, an unknown key, a wrong type,
-    /// or a value out of range ([`GraspDatasetConfig::validate`]).
+    /// [`Error::Io`] for an unreadable file; [`Error::ConfigFile`] naming the file for what is
+    /// wrong in it: [`Error::Toml`] (malformed, an unknown key, a wrong type) or a value out of
+    /// range ([`GraspDatasetConfig::validate`]).
     pub fn from_file(path: &Path) -> Result<Self> {
-        let fail = |detail: String| Error::Config {
-            detail,
-            path: path.to_path_buf(),
-        };
-        let text = std::fs::read_to_string(path).map_err(|e| fail(e.to_string()))?;
-        let config: Self = toml::from_str(&text).map_err(|e| fail(e.to_string()))?;
-        config.validate().map_err(|e| fail(e.to_string()))?;
+        let text = std::fs::read_to_string(path).map_err(Error::io("read", path))?;
+        let config: Self =
+            toml::from_str(&text).map_err(|source| Error::Toml { source }.in_config(path))?;
+        config.validate().map_err(|e| e.in_config(path))?;
         Ok(config)
     }
 
     /// Checks every value that the types do not.
     ///
     /// # Errors
-    /// [`Error::Dataset`] naming the first bad key, or the gripper's or intrinsics' error.
+    /// [`Error::ConfigValue`] naming the first bad key, or the gripper's or intrinsics' error.
     pub fn validate(&self) -> Result<()> {
-        let bad = |key: &str, why: &str| {
-            Err(Error::Dataset {
-                detail: format!("config key {key}: {why}"),
+        fn bad(
+            key: &'static str,
+            value: impl std::fmt::Debug,
+            expected: &'static str,
+        ) -> Result<()> {
+            Err(Error::ConfigValue {
+                key,
+                value: format!("{value:?}"),
+                expected,
             })
-        };
+        }
         self.gripper()?;
         self.intrinsics()?;
         for (key, value) in [
@@ -192,18 +196,26 @@ impl GraspDatasetConfig {
             ("objects_per_shard", self.objects_per_shard),
         ] {
             if value == 0 {
-                return bad(key, "must be at least 1");
+                return bad(key, value, "must be at least 1");
             }
         }
         if !(self.max_tilt_deg.is_finite() && (0.0..90.0).contains(&self.max_tilt_deg)) {
-            return bad("max_tilt_deg", "must be in [0, 90)");
+            return bad("max_tilt_deg", self.max_tilt_deg, "must be in [0, 90)");
         }
         if !(0.0..=1.0).contains(&self.physics_fraction) {
-            return bad("physics_fraction", "must be in [0, 1]");
+            return bad(
+                "physics_fraction",
+                self.physics_fraction,
+                "must be in [0, 1]",
+            );
         }
         let c = self.crop;
         if c.size_px == 0 || !c.size_px.is_multiple_of(2) || c.window_px < c.size_px {
-            return bad("crop", "size_px must be even and > 0, window_px >= size_px");
+            return bad(
+                "crop",
+                c,
+                "size_px must be even and > 0, window_px >= size_px",
+            );
         }
         let n = self.noise;
         let noise_ok = n.gamma_shape.is_finite()
@@ -214,6 +226,7 @@ impl GraspDatasetConfig {
         if !noise_ok {
             return bad(
                 "noise",
+                n,
                 "gamma_shape > 0, sigma_m >= 0 and correlation_px >= 1",
             );
         }
@@ -221,7 +234,11 @@ impl GraspDatasetConfig {
         match self.cameras {
             CameraDistribution::TopDown(t) => {
                 if !(ordered(t.radius_m) && t.radius_m[0] > 0.0) {
-                    return bad("cameras.radius_m", "must be [min, max] with 0 < min <= max");
+                    return bad(
+                        "cameras.radius_m",
+                        t.radius_m,
+                        "must be [min, max] with 0 < min <= max",
+                    );
                 }
                 if !((0.0..=90.0).contains(&t.max_polar_deg)
                     && t.planar_offset_m.is_finite()
@@ -229,19 +246,28 @@ impl GraspDatasetConfig {
                 {
                     return bad(
                         "cameras",
+                        t,
                         "max_polar_deg must be in [0, 90], planar_offset_m >= 0",
                     );
                 }
             }
             CameraDistribution::MultiView(m) => {
                 if !(ordered(m.radius_m) && m.radius_m[0] > 0.0) {
-                    return bad("cameras.radius_m", "must be [min, max] with 0 < min <= max");
+                    return bad(
+                        "cameras.radius_m",
+                        m.radius_m,
+                        "must be [min, max] with 0 < min <= max",
+                    );
                 }
                 if !(ordered(m.elevation_deg)
                     && m.elevation_deg[0] >= 0.0
                     && m.elevation_deg[1] <= 90.0)
                 {
-                    return bad("cameras.elevation_deg", "must be [min, max] within [0, 90]");
+                    return bad(
+                        "cameras.elevation_deg",
+                        m.elevation_deg,
+                        "must be [min, max] within [0, 90]",
+                    );
                 }
             }
         }
@@ -254,7 +280,7 @@ impl GraspDatasetConfig {
     /// The gripper the config names.
     ///
     /// # Errors
-    /// [`Error::Dataset`] when it is neither a preset nor a readable gripper file.
+    /// [`Error::ConfigValue`] when it is neither a preset nor a readable gripper file.
     pub fn gripper(&self) -> Result<Gripper> {
         if let Ok(preset) = self.gripper.parse::<GripperPreset>() {
             return Ok(Gripper::preset(preset));
@@ -262,30 +288,26 @@ impl GraspDatasetConfig {
         if Path::new(&self.gripper).exists() {
             return Ok(Gripper::from_file(&self.gripper)?);
         }
-        Err(Error::Dataset {
-            detail: format!(
-                "config key gripper: {:?} is neither a preset (panda, yumi, robotiq_2f_85) nor a \
-                 file that exists",
-                self.gripper
-            ),
+        Err(Error::ConfigValue {
+            key: "gripper",
+            value: format!("{:?}", self.gripper),
+            expected: "a preset (panda, yumi, robotiq_2f_85) or a gripper file that exists",
         })
     }
 
     /// The intrinsics the config names.
     ///
     /// # Errors
-    /// [`Error::Dataset`] for an unknown preset name.
+    /// [`Error::ConfigValue`] for an unknown preset name.
     pub fn intrinsics(&self) -> Result<Intrinsics> {
         IntrinsicsPreset::ALL
             .into_iter()
             .find(|p| p.name() == self.intrinsics)
             .map(Intrinsics::preset)
-            .ok_or_else(|| Error::Dataset {
-                detail: format!(
-                    "config key intrinsics: {:?} is not one of phoxi_s, primesense, \
-                     realsense_d435",
-                    self.intrinsics
-                ),
+            .ok_or_else(|| Error::ConfigValue {
+                key: "intrinsics",
+                value: format!("{:?}", self.intrinsics),
+                expected: "one of phoxi_s, primesense, realsense_d435",
             })
     }
 }

@@ -106,13 +106,12 @@ impl DatasetPlan {
     /// Checks the config and names the objects (ids in the order given).
     ///
     /// # Errors
-    /// [`Error::Dataset`] for an invalid config, no objects, or two objects with one name.
+    /// An invalid config ([`GraspDatasetConfig::validate`]), [`Error::NoObjects`], or
+    /// [`Error::DuplicateObject`] for two objects with one name.
     pub fn new(sources: &[ObjectSource], config: &GraspDatasetConfig) -> Result<Self> {
         config.validate()?;
         if sources.is_empty() {
-            return Err(Error::Dataset {
-                detail: "no objects to make a grasp dataset of".into(),
-            });
+            return Err(Error::NoObjects);
         }
         let names = unique_names(sources)?;
         let objects = sources
@@ -151,20 +150,17 @@ impl DatasetPlan {
     /// The record of shard `index` when it is finished in `out` and made by this plan.
     ///
     /// # Errors
-    /// [`Error::Config`] when a finished shard there was made with another config or other
-    /// objects (or by a version of mvgrasp that did not record it).
+    /// [`Error::ForeignShard`] when a finished shard there was made with another config or
+    /// other objects (or by a version of mvgrasp that did not record it).
     fn finished(&self, out: &Path, index: usize) -> Result<Option<ShardRecord>> {
         let Some(record) = finished_shard(out, index) else {
             return Ok(None);
         };
         if record.plan_hash != self.hash() {
-            return Err(Error::Config {
-                detail: format!(
-                    "shard {index} was made with another config or other objects (plan hash \
-                     {:?}, this one {:?}); use another folder or delete it",
-                    record.plan_hash,
-                    self.hash()
-                ),
+            return Err(Error::ForeignShard {
+                index,
+                found: record.plan_hash,
+                expected: self.hash(),
                 path: out.join(shard::shard_file(index)),
             });
         }
@@ -196,8 +192,8 @@ impl DatasetPlan {
     /// Writes the manifest from the shards finished in `out`; returns it.
     ///
     /// # Errors
-    /// [`Error::Io`] when it cannot be written; [`Error::Config`] when a finished shard there
-    /// was made with another config or other objects.
+    /// [`Error::Io`] when it cannot be written; [`Error::ForeignShard`] when a finished shard
+    /// there was made with another config or other objects.
     pub fn write_manifest(&self, out: &Path) -> Result<Manifest> {
         let mut shards = Vec::new();
         for i in 0..self.num_shards() {
@@ -209,10 +205,13 @@ impl DatasetPlan {
     /// Writes the manifest of `shards` (finished, in index order); returns it.
     fn write_manifest_of(&self, out: &Path, shards: Vec<ShardRecord>) -> Result<Manifest> {
         let manifest = self.manifest(shards);
-        let text = serde_json::to_string_pretty(&manifest).map_err(|e| Error::Dataset {
-            detail: format!("{}: {e}", out.display()),
-        })? + "\n";
-        write_atomically(&out.join("dataset.json"), text.as_bytes())?;
+        let path = out.join("dataset.json");
+        let text = serde_json::to_string_pretty(&manifest).map_err(Error::json(
+            "write",
+            "grasp-dataset manifest",
+            &path,
+        ))? + "\n";
+        write_atomically(&path, text.as_bytes())?;
         Ok(manifest)
     }
 
@@ -222,18 +221,14 @@ impl DatasetPlan {
         let Ok(text) = std::fs::read_to_string(&path) else {
             return Ok(());
         };
-        let fail = |detail: &str| Error::Config {
-            detail: detail.into(),
-            path: path.clone(),
-        };
-        let existing: Manifest = serde_json::from_str(&text)
-            .map_err(|e| fail(&format!("not a grasp dataset manifest: {e}")))?;
+        let existing: Manifest = serde_json::from_str(&text).map_err(Error::json(
+            "read",
+            "grasp-dataset manifest",
+            &path,
+        ))?;
         let fresh = self.manifest(Vec::new());
         if existing.config != fresh.config || existing.objects != fresh.objects {
-            return Err(fail(
-                "this folder holds a dataset made with another config or other objects; use \
-                 another folder or delete it",
-            ));
+            return Err(Error::ForeignDataset { path });
         }
         Ok(())
     }
@@ -246,7 +241,7 @@ impl DatasetPlan {
 /// error, in the record's `empty_objects`.
 ///
 /// # Errors
-/// [`Error::Dataset`] for an index beyond the plan; write errors; a renderer error.
+/// [`Error::NoSuchShard`] for an index beyond the plan; write errors; a renderer error.
 pub fn generate_shard(
     renderer: &Renderer,
     plan: &DatasetPlan,
@@ -254,11 +249,9 @@ pub fn generate_shard(
     index: usize,
 ) -> Result<ShardRecord> {
     if index >= plan.num_shards() {
-        return Err(Error::Dataset {
-            detail: format!(
-                "shard {index} does not exist: the dataset has {}",
-                plan.num_shards()
-            ),
+        return Err(Error::NoSuchShard {
+            index,
+            num_shards: plan.num_shards(),
         });
     }
     if let Some(record) = plan.finished(out, index)? {
@@ -320,7 +313,7 @@ fn make_shard(
 /// an interrupted run's manifest is rewritten by the next.
 ///
 /// # Errors
-/// [`Error::Config`] when `out` holds a dataset of another config; the errors of
+/// [`Error::ForeignDataset`] when `out` holds a dataset of another config; the errors of
 /// [`DatasetPlan::new`] and [`generate_shard`].
 pub fn generate(
     renderer: &Renderer,
@@ -370,21 +363,22 @@ pub fn generate(
 /// Reads `dir/dataset.json`.
 ///
 /// # Errors
-/// [`Error::Config`] naming the file when it is missing or not a grasp-dataset manifest.
+/// [`Error::Io`], [`Error::Json`] or [`Error::Format`] naming the file when it is missing or
+/// not a grasp-dataset manifest.
 pub fn read_manifest(dir: &Path) -> Result<Manifest> {
     let path = dir.join("dataset.json");
-    let fail = |detail: String| Error::Config {
-        detail,
-        path: path.clone(),
-    };
-    let text = std::fs::read_to_string(&path).map_err(|e| fail(e.to_string()))?;
-    let manifest: Manifest = serde_json::from_str(&text)
-        .map_err(|e| fail(format!("not a grasp-dataset manifest: {e}")))?;
+    let text = std::fs::read_to_string(&path).map_err(Error::io("read", &path))?;
+    let manifest: Manifest = serde_json::from_str(&text).map_err(Error::json(
+        "read",
+        "grasp-dataset manifest",
+        &path,
+    ))?;
     if manifest.format != FORMAT {
-        return Err(fail(format!(
-            "format {:?}, expected {FORMAT:?}",
-            manifest.format
-        )));
+        return Err(Error::Format {
+            found: manifest.format,
+            expected: FORMAT,
+            path,
+        });
     }
     Ok(manifest)
 }
@@ -421,6 +415,7 @@ fn unique_names(sources: &[ObjectSource]) -> Result<Vec<String>> {
         _ => source.name(),
     };
     let mut depth = vec![0usize; sources.len()];
+    let mut clash = String::new();
     for _ in 0..8 {
         let names: Vec<String> = sources
             .iter()
@@ -432,15 +427,14 @@ fn unique_names(sources: &[ObjectSource]) -> Result<Vec<String>> {
             if names.iter().filter(|n| **n == names[i]).count() > 1 {
                 depth[i] += 1;
                 clashing = true;
+                clash.clone_from(&names[i]);
             }
         }
         if !clashing {
             return Ok(names);
         }
     }
-    Err(Error::Dataset {
-        detail: "objects with the same name and path; list each file once".into(),
-    })
+    Err(Error::DuplicateObject { name: clash })
 }
 
 #[cfg(test)]

@@ -36,8 +36,9 @@ struct Tile {
 /// spread evenly over the finished shards, `columns` tiles a row.
 ///
 /// # Errors
-/// [`Error::Dataset`] naming the file for a missing manifest or an unreadable shard, or when
-/// the dataset has no datapoint.
+/// [`Error::Io`], [`Error::Json`] or [`Error::Safetensors`] naming the file for a missing
+/// manifest or an unreadable shard, or [`Error::EmptyDataset`] when
+/// it has no datapoint.
 pub fn write_preview(dir: &Path, png: &Path, per_class: usize, columns: usize) -> Result<()> {
     let manifest: Manifest = read_manifest(dir)?;
     let size = manifest.config.crop.size_px as usize;
@@ -50,8 +51,10 @@ pub fn write_preview(dir: &Path, png: &Path, per_class: usize, columns: usize) -
     for record in &manifest.shards {
         let path = dir.join(shard_file(record.index));
         let bytes = std::fs::read(&path).map_err(Error::io("read", &path))?;
-        let fail = |e: safetensors::SafeTensorError| Error::Dataset {
-            detail: format!("{}: {e}", path.display()),
+        let fail = |source: safetensors::SafeTensorError| Error::Safetensors {
+            op: "read",
+            source,
+            path: path.clone(),
         };
         let shard = SafeTensors::deserialize(&bytes).map_err(fail)?;
         let column = |name: &str| shard.tensor(name).map_err(fail);
@@ -94,8 +97,8 @@ pub fn write_preview(dir: &Path, png: &Path, per_class: usize, columns: usize) -
     positives.truncate(per_class);
     negatives.truncate(per_class);
     if positives.is_empty() && negatives.is_empty() {
-        return Err(Error::Dataset {
-            detail: format!("{}: the dataset has no datapoint to preview", dir.display()),
+        return Err(Error::EmptyDataset {
+            path: dir.to_path_buf(),
         });
     }
     let rows_of = |n: usize| n.div_ceil(columns);

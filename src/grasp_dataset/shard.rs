@@ -184,7 +184,7 @@ fn bytes_u32(values: impl Iterator<Item = u32>) -> Vec<u8> {
 /// a temporary file and a rename.
 ///
 /// # Errors
-/// [`Error::Io`] or [`Error::Dataset`] naming the file.
+/// [`Error::Io`], [`Error::Json`] or [`Error::Safetensors`] naming the file.
 pub fn write_shard(
     dir: &Path,
     points: &[Datapoint],
@@ -330,21 +330,27 @@ pub fn write_shard(
         .map(|(name, dtype, shape, data)| {
             TensorView::new(*dtype, shape.clone(), data)
                 .map(|view| (*name, view))
-                .map_err(|e| Error::Dataset {
-                    detail: format!("{}: tensor {name}: {e}", shard_path.display()),
+                .map_err(|source| Error::Safetensors {
+                    op: "write",
+                    source,
+                    path: shard_path.clone(),
                 })
         })
         .collect::<Result<Vec<_>>>()?;
     // No metadata map: safetensors stores it from a HashMap, whose order would vary the bytes.
-    let bytes = safetensors::serialize(views, None).map_err(|e| Error::Dataset {
-        detail: format!("{}: {e}", shard_path.display()),
+    let bytes = safetensors::serialize(views, None).map_err(|source| Error::Safetensors {
+        op: "write",
+        source,
+        path: shard_path.clone(),
     })?;
     let sidecar = sidecar_path(dir, record.index);
     write_atomically(
         &sidecar,
-        (serde_json::to_string_pretty(record).map_err(|e| Error::Dataset {
-            detail: format!("{}: {e}", sidecar.display()),
-        })? + "\n")
+        (serde_json::to_string_pretty(record).map_err(Error::json(
+            "write",
+            "shard record",
+            &sidecar,
+        ))? + "\n")
             .as_bytes(),
     )?;
     write_atomically(&shard_path, &bytes)

@@ -10,8 +10,11 @@ it with types (see ``_native.pyi``). Grasp datasets have a friendlier face in
 
 from mvgrasp._native import (
     CameraError,
+    DatasetError,
     MeshError,
     MvGraspError,
+    PlanningError,
+    RenderError,
     WeightsError,
     __version__,
     generate_grasp_dataset,
@@ -23,8 +26,11 @@ from mvgrasp._native import (
 
 __all__ = [
     "CameraError",
+    "DatasetError",
     "MeshError",
     "MvGraspError",
+    "PlanningError",
+    "RenderError",
     "WeightsError",
     "__version__",
     "generate_grasp_dataset",

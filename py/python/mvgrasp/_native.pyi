@@ -20,6 +20,16 @@ class CameraError(MvGraspError):
 class WeightsError(MvGraspError):
     """A network's weights are missing, unreadable or do not match its architecture."""
 
+class RenderError(MvGraspError):
+    """No graphics adapter could be opened, or rendering failed."""
+
+class PlanningError(MvGraspError):
+    """Depth images, views or a network that the planner cannot use."""
+
+class DatasetError(MvGraspError):
+    """A dataset's config, folder, shards or manifest cannot be used; the message names the
+    file."""
+
 def load_mesh(
     path: str | os.PathLike[str], scale: float = 1.0
 ) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.uint32]]:
