@@ -8,8 +8,7 @@ mod common;
 use std::path::Path;
 
 use mvgrasp::geometry::objects::{Category, generate};
-use mvgrasp::grasp::quality::robust_qualities;
-use mvgrasp::grasp::{GraspObject, check_collision};
+use mvgrasp::grasp::{GraspObject, label_grasps};
 use mvgrasp::infer::Gqcnn;
 use mvgrasp::planner::{GqcnnPolicy, PlanParams, PlanReport, ScoredGrasp, models, plan_grasp};
 
@@ -55,33 +54,19 @@ fn labels(
     params: &PlanParams,
 ) -> Vec<bool> {
     let gripper = params.labels.gripper().unwrap();
-    let table_from_object = report.table_from_object;
-    grasps
-        .iter()
-        .map(|g| {
-            let object_from_gripper = table_from_object.inverse() * g.grasp.world_from_gripper;
-            let quality = robust_qualities(
-                object,
-                &[object_from_gripper],
-                &gripper,
-                &params.labels.quality,
-                0,
-            )
-            .unwrap()[0];
-            let free = check_collision(
-                object,
-                &gripper,
-                &object_from_gripper,
-                Some(&table_from_object),
-                &params.labels.sampling.collision,
-            )
-            .is_free();
-            params
-                .labels
-                .quality
-                .dexnet_label(quality.robust_epsilon, free)
-        })
-        .collect()
+    let world: Vec<_> = grasps.iter().map(|g| g.grasp).collect();
+    label_grasps(
+        object,
+        &report.table_from_object,
+        &world,
+        &gripper,
+        &params.labels.label_params(None),
+        0,
+    )
+    .unwrap()
+    .iter()
+    .map(|label| label.robust)
+    .collect()
 }
 
 fn rate(labels: &[bool]) -> f32 {

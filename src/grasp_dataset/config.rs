@@ -3,9 +3,9 @@
 use std::path::Path;
 
 use mvgrasp_geometry::{Intrinsics, IntrinsicsPreset};
-use mvgrasp_grasp::physics::PhysicsParams;
+use mvgrasp_grasp::physics::{PhysicsObject, PhysicsParams};
 use mvgrasp_grasp::quality::RobustQualityParams;
-use mvgrasp_grasp::{Gripper, GripperPreset, SamplingParams};
+use mvgrasp_grasp::{Gripper, GripperPreset, LabelParams, SamplingParams};
 pub use mvgrasp_planner::CropParams;
 use serde::{Deserialize, Serialize};
 
@@ -293,6 +293,16 @@ impl GraspDatasetConfig {
             value: format!("{:?}", self.gripper),
             expected: "a preset (panda, yumi, robotiq_2f_85) or a gripper file that exists",
         })
+    }
+
+    /// How this config labels grasps ([`mvgrasp_grasp::label_grasps`]), with a rapier trial on
+    /// `body` when given.
+    pub fn label_params<'a>(&'a self, body: Option<&'a PhysicsObject>) -> LabelParams<'a> {
+        LabelParams {
+            quality: &self.quality,
+            collision: &self.sampling.collision,
+            physics: body.map(|body| (&self.physics, body)),
+        }
     }
 
     /// The intrinsics the config names.

@@ -5,7 +5,7 @@ use mvgrasp_geometry::{Pose3, RestingPoses, TriangleMesh, Vec3};
 use mvgrasp_grasp::physics::{PhysicsObject, simulate_grasp};
 use mvgrasp_grasp::quality::{grasp_seed, robust_qualities};
 use mvgrasp_grasp::{
-    AntipodalAxis, Grasp, GraspObject, Gripper, canonical_frame, check_collision,
+    AntipodalAxis, Grasp, GraspLabel, GraspObject, Gripper, canonical_frame, check_collision,
     sample_antipodal_axes,
 };
 use mvgrasp_render::{Colors, Renderer};
@@ -141,7 +141,9 @@ pub(crate) fn object_datapoints(
                     Some(&table_from_object),
                     &config.sampling.collision,
                 );
-                let collision_free = collision.is_free();
+                // The one label ([`GraspLabel`]): the axis's robust quality, scored once for
+                // every view, and this view's approach.
+                let label = GraspLabel::of(*quality, collision.is_free(), &config.quality);
                 candidates.push(Datapoint {
                     crop: crop_depth(&depth, image.center_px, image.angle_rad, &config.crop),
                     grasp_depth_m: image.depth_m,
@@ -150,10 +152,8 @@ pub(crate) fn object_datapoints(
                     center_px: image.center_px,
                     width_m: axis.contacts.width_m,
                     robust_epsilon: quality.robust_epsilon as f32,
-                    robust_label: config
-                        .quality
-                        .dexnet_label(quality.robust_epsilon, collision_free),
-                    collision_free,
+                    robust_label: label.robust,
+                    collision_free: label.collision_free,
                     force_closure: quality.nominal_force_closure,
                     physics: -1,
                     physics_stage: -1,

@@ -6,9 +6,8 @@ use std::time::Instant;
 use mvgrasp_geometry::{
     Camera, HemisphereLayout, Intrinsics, IntrinsicsPreset, Pose3, RestingPoses, TriangleMesh,
 };
-use mvgrasp_grasp::physics::{PhysicsObject, PhysicsOutcome, simulate_grasp};
-use mvgrasp_grasp::quality::robust_qualities;
-use mvgrasp_grasp::{GraspObject, PaperGrasp, check_collision};
+use mvgrasp_grasp::physics::{PhysicsObject, PhysicsOutcome};
+use mvgrasp_grasp::{GraspObject, PaperGrasp, label_grasps};
 use mvgrasp_render::Renderer;
 use serde::Serialize;
 
@@ -181,43 +180,28 @@ pub fn check_grasp(
     params: &PlanParams,
 ) -> Result<(AnalyticCheck, Option<PhysicsOutcome>)> {
     let gripper = params.labels.gripper()?;
-    let object_from_gripper = table_from_object.inverse() * grasp.grasp.world_from_gripper;
-    let quality = robust_qualities(
-        object,
-        &[object_from_gripper],
-        &gripper,
-        &params.labels.quality,
-        params.seed,
-    )?[0];
-    let collision_free = check_collision(
-        object,
-        &gripper,
-        &object_from_gripper,
-        Some(table_from_object),
-        &params.labels.sampling.collision,
-    )
-    .is_free();
-    let analytic = AnalyticCheck {
-        robust_epsilon: quality.robust_epsilon,
-        collision_free,
-        robust: params
-            .labels
-            .quality
-            .dexnet_label(quality.robust_epsilon, collision_free),
-    };
-    let physics = if params.physics {
-        let physics_object = PhysicsObject::from_grasp_object(object, &Default::default())?;
-        Some(simulate_grasp(
-            &physics_object,
-            table_from_object,
-            &grasp.grasp,
-            &gripper,
-            &params.labels.physics,
+    let body = if params.physics {
+        Some(PhysicsObject::from_grasp_object(
+            object,
+            &Default::default(),
         )?)
     } else {
         None
     };
-    Ok((analytic, physics))
+    let label = label_grasps(
+        object,
+        table_from_object,
+        &[grasp.grasp],
+        &gripper,
+        &params.labels.label_params(body.as_ref()),
+        params.seed,
+    )?[0];
+    let analytic = AnalyticCheck {
+        robust_epsilon: label.quality.robust_epsilon,
+        collision_free: label.collision_free,
+        robust: label.robust,
+    };
+    Ok((analytic, label.physics))
 }
 
 /// The main job in its three stages: [`render_scene`] (the object at rest and the views' depth),

@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::Result;
 use crate::grasp::Grasp;
+use crate::label::GraspLabel;
 use crate::gripper::Gripper;
 use crate::object::GraspObject;
 use crate::physics::{
@@ -144,7 +145,8 @@ pub fn analyse(
                 grasp,
                 object_from_gripper: sampled.grasp.world_from_gripper,
                 quality: *quality,
-                robust_label: config.quality.dexnet_label(quality.robust_epsilon, true),
+                // Sampling kept only approaches clear of the object and the table.
+                robust_label: GraspLabel::of(*quality, true, &config.quality).robust,
                 physics,
                 physics_success,
             })

@@ -6,6 +6,7 @@ pub mod error;
 pub mod grasp;
 pub mod gripper;
 pub mod gripper_urdf;
+pub mod label;
 pub mod object;
 pub mod physics;
 pub mod quality;
@@ -17,6 +18,7 @@ pub use error::{GraspError, Result};
 pub use grasp::{Grasp, ImageGrasp, PaperGrasp};
 pub use gripper::{Gripper, GripperPreset};
 pub use gripper_urdf::{UrdfGripper, UrdfGripperSpec};
+pub use label::{GraspLabel, LabelParams, label_grasps};
 pub use object::GraspObject;
 pub use sampling::{
     AntipodalAxis, SampledGrasp, SamplingParams, SamplingReport, canonical_frame, sample_antipodal,
