@@ -4,9 +4,7 @@
 
 use std::process::Command;
 
-#[path = "support/shared_data.rs"]
-mod shared_data;
-use shared_data::shared_data;
+use crate::shared_data::shared_data;
 
 fn plan(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_plan"))

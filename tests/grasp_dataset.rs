@@ -2,7 +2,7 @@
 //! shard's own records, determinism across thread counts, and kill -9 then resume.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // tests may fail loudly
 
-mod common;
+use crate::common;
 
 use common::renderer;
 use std::path::Path;

@@ -3,12 +3,10 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // tests may fail loudly
 
-mod common;
+use crate::common;
 
+use crate::shared_data::shared_data;
 use common::renderer;
-#[path = "support/shared_data.rs"]
-mod shared_data;
-use shared_data::shared_data;
 use std::path::{Path, PathBuf};
 
 use mvgrasp::convert::render_view;

@@ -3,7 +3,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // tests may fail loudly
 
-mod common;
+use crate::common;
 
 use mvgrasp_geometry::{Intrinsics, IntrinsicsPreset, Vec3, read_tf};
 

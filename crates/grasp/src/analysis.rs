@@ -8,8 +8,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::Result;
 use crate::grasp::Grasp;
-use crate::label::GraspLabel;
 use crate::gripper::Gripper;
+use crate::label::GraspLabel;
 use crate::object::GraspObject;
 use crate::physics::{
     PhysicsNoise, PhysicsObject, PhysicsOutcome, PhysicsParams, SuccessEstimate, simulate_grasp,

@@ -6,9 +6,7 @@ use std::path::Path;
 
 use mvgrasp_grasp::{Gripper, UrdfGripperSpec};
 
-#[path = "../../../tests/support/shared_data.rs"]
-mod shared_data;
-use shared_data::shared_data;
+use crate::shared_data::shared_data;
 
 const SLIDE: &str = r#"<robot name="slide">
   <link name="palm"><collision><geometry><box size="0.1 0.04 0.02"/></geometry></collision></link>

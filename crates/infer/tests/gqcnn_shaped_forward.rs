@@ -3,7 +3,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // tests may fail loudly
 
-mod common;
+use crate::common;
 
 use common::{Rng, assert_close, assert_same_bits};
 use mvgrasp_infer::ops::{self, Conv2dParams, LocalResponseNorm, Pool2dParams};

@@ -2,7 +2,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // tests may fail loudly
 
-mod common;
+use crate::common;
 
 use common::{cuboid, mesh, renderers, view_at_origin};
 use mvgrasp_render::{Backend, Colors, IDENTITY, Intrinsics, RenderError, Renderer, View};

@@ -3,7 +3,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // tests may fail loudly
 
-mod common;
+use crate::common;
 
 use common::{centred, cuboid, mesh, quad, renderers, view_at_origin};
 use mvgrasp_render::{Colors, Intrinsics, View, project};

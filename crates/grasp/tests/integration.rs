@@ -1,0 +1,10 @@
+//! The grasp crate's integration tests in one binary.
+
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // tests may fail loudly
+
+#[path = "../../../tests/support/shared_data.rs"]
+mod shared_data;
+
+mod gripper_urdf;
+mod physics;
+mod quality;
