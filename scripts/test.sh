@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # scripts/test.sh: THE test command of mvgrasp. Runs every check and every test:
 #   cargo fmt --check; cargo clippy -D warnings; cargo test (the Rust workspace without the
-#   pyo3 crate, so this part needs no Python); clippy on the pyo3 crate; the wheel built by
+#   pyo3 crate, so this part needs no Python; in the `dist` profile, the wheel's, so that the
+#   optimised dependencies are built once for both); clippy on the pyo3 crate; the wheel built by
 #   maturin and tested with pytest (py/tests); the training package tested with pytest
 #   (training/tests).
 #
@@ -105,8 +106,8 @@ cargo fmt --all -- --check
 section "cargo clippy (workspace without the pyo3 crate)"
 cargo clippy --workspace --exclude mvgrasp-py --all-targets -- -D warnings
 
-section "cargo test (workspace without the pyo3 crate)"
-cargo test --workspace --exclude mvgrasp-py
+section "cargo test --profile dist (workspace without the pyo3 crate)"
+cargo test --workspace --exclude mvgrasp-py --profile dist
 
 # --- The wheel. clippy on the pyo3 crate needs the interpreter; PYO3_BUILD_EXTENSION_MODULE
 # matches what maturin sets. (maturin also passes its own PYO3_CONFIG_FILE, so pyo3's build
