@@ -321,3 +321,46 @@ impl GraspDatasetConfig {
             })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The committed configs behind the shipped networks parse, and name the camera
+    /// distributions their networks' input contracts assume.
+    #[test]
+    fn the_shipped_dataset_configs_parse() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("training/configs/datasets");
+        let topdown = GraspDatasetConfig::from_file(&dir.join("topdown.toml")).unwrap();
+        assert_eq!(topdown, GraspDatasetConfig::default());
+        let multiview = GraspDatasetConfig::from_file(&dir.join("multiview.toml")).unwrap();
+        assert_eq!(
+            multiview.cameras,
+            CameraDistribution::MultiView(MultiViewCameras::default())
+        );
+        assert_eq!(
+            GraspDatasetConfig {
+                cameras: topdown.cameras,
+                ..multiview
+            },
+            topdown
+        );
+    }
+
+    #[test]
+    fn a_bad_value_names_its_file_and_key() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("bad.toml");
+        std::fs::write(&path, "physics_fraction = 2.0\n").unwrap();
+        let err = GraspDatasetConfig::from_file(&path).unwrap_err();
+        assert!(
+            matches!(&err, Error::ConfigFile { source, .. }
+                if matches!(**source, Error::ConfigValue { key: "physics_fraction", .. })),
+            "{err:?}"
+        );
+        assert!(
+            err.to_string()
+                .contains("bad.toml: config key physics_fraction = 2.0")
+        );
+    }
+}
