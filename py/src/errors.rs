@@ -74,6 +74,11 @@ pub(crate) fn mesh_error(error: GeometryError) -> PyErr {
     }
 }
 
+/// Maps an error from a camera file: `CameraError`, with the Rust message naming the file.
+pub(crate) fn camera_error(error: GeometryError) -> PyErr {
+    CameraError::new_err(error.to_string())
+}
+
 /// Maps a pipeline error onto the tree by its variant, always with the Rust message.
 pub(crate) fn pipeline_error(error: Error) -> PyErr {
     let message = error.to_string();

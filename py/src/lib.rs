@@ -8,16 +8,20 @@
 //! deprecated `extension-module` feature is therefore not used. The crate is not in the
 //! workspace's `default-members`, so a bare `cargo build` / `cargo test` needs no Python.
 
+mod cameras;
 mod convert;
 mod errors;
 mod grasp_dataset;
 mod mesh;
+mod networks;
 
 /// The native half of the `mvgrasp` package; import `mvgrasp`, not this module.
 #[pyo3::pymodule(name = "_native")]
 mod native {
     use pyo3::prelude::*;
 
+    #[pymodule_export]
+    use crate::cameras::load_intrinsics;
     #[pymodule_export]
     use crate::errors::{
         CameraError, DatasetError, MeshError, MvGraspError, PlanningError, RenderError,
@@ -30,6 +34,8 @@ mod native {
     };
     #[pymodule_export]
     use crate::mesh::load_mesh;
+    #[pymodule_export]
+    use crate::networks::load_network;
 
     #[pymodule_init]
     fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {

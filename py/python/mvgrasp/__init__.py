@@ -20,7 +20,9 @@ from mvgrasp._native import (
     generate_grasp_dataset,
     generate_grasp_shard,
     grasp_dataset_num_shards,
+    load_intrinsics,
     load_mesh,
+    load_network,
     write_grasp_manifest,
 )
 
@@ -36,6 +38,8 @@ __all__ = [
     "generate_grasp_dataset",
     "generate_grasp_shard",
     "grasp_dataset_num_shards",
+    "load_intrinsics",
     "load_mesh",
+    "load_network",
     "write_grasp_manifest",
 ]

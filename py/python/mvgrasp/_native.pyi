@@ -45,6 +45,29 @@ def load_mesh(
         ValueError: ``scale`` is not a finite number > 0.
     """
 
+def load_intrinsics(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """Reads a Berkeley ``.intr`` file (JSON with ``_fx _fy _cx _cy _width _height``).
+
+    Returns the intrinsics as a dict: ``fx``, ``fy``, ``cx``, ``cy`` (pixels), ``width``,
+    ``height``, ``z_near_m``, ``z_far_m``.
+
+    Raises:
+        CameraError: the file is missing, unparsable or holds invalid intrinsics; the message
+            names the file.
+    """
+
+def load_network(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """Loads a GQ-CNN export (``NAME.json`` and the ``NAME.safetensors`` it names) as the
+    planner does, checking every tensor's name and shape and the input contract.
+
+    Returns its description: ``format``, ``architecture``, ``normalisation``, ``input`` (the
+    input contract, or None for exports made before it was recorded) and ``training``.
+
+    Raises:
+        WeightsError: a file is missing or a tensor or the contract does not match the
+            architecture; the message names the file.
+    """
+
 def grasp_dataset_num_shards(
     config: str | None = None,
     meshes: list[str] | None = None,

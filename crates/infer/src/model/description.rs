@@ -1,12 +1,12 @@
 //! The JSON that travels with a GQ-CNN's weights (written by `training/mvgrasp_training/export.py`).
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 /// The format tag of a GQ-CNN description.
 pub const GQCNN_FORMAT: &str = "mvgrasp-gqcnn/1";
 
 /// `NAME.json`.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 pub struct GqcnnDescription {
     /// [`GQCNN_FORMAT`].
     pub format: String,
@@ -27,7 +27,7 @@ pub struct GqcnnDescription {
 
 /// The network's input contract, recorded by the training export from the manifest and the
 /// crops of the dataset it was trained on: a GQ-CNN only knows crops like those.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct InputSpec {
     /// Side of the window cut around a grasp in the training images, pixels.
@@ -87,7 +87,7 @@ impl InputSpec {
 }
 
 /// The layers of a GQ-CNN (see the training code's `Architecture`).
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 pub struct Architecture {
     /// A name ("dexnet2", "small", ...).
     pub name: String,
@@ -114,7 +114,7 @@ pub struct Architecture {
 }
 
 /// One convolution: "same" padding, stride 1, ReLU, then LRN and max pooling if asked.
-#[derive(Clone, Copy, Debug, Deserialize)]
+#[derive(Clone, Copy, Debug, Deserialize, Serialize)]
 pub struct ConvSpec {
     /// Output channels.
     pub filters: usize,
@@ -127,7 +127,7 @@ pub struct ConvSpec {
 }
 
 /// Input statistics: `(x - mean) / std`.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 pub struct Normalisation {
     /// Depth crop mean, metres.
     pub image_mean: f32,
