@@ -1,0 +1,95 @@
+#!/usr/bin/env bash
+# Reproduces the shipped networks of models/ from a clean clone: the grasp datasets they were
+# trained on (training/configs/datasets/), the two training runs (training/configs/), the
+# exports copied into models/ and the torch-parity fixtures of the Rust tests rewritten.
+#
+#   training/scripts/reproduce_shipped_models.sh            # about an hour on a 2-core CPU
+#   QUICK=1 training/scripts/reproduce_shipped_models.sh    # minutes: 1 object per category,
+#                                                           # 1 epoch, into a scratch folder;
+#                                                           # models/ is left alone
+#
+# Needs cargo, and a Python with the training package's dependencies (torch, numpy, safetensors,
+# matplotlib; `.ci/run` makes such a .venv): PYTHON, else .venv/bin/python, else python3.
+# Datasets go where the training configs expect them (../datasets beside the repository), runs
+# to ../runs; with QUICK=1 both go under a temporary folder. The test split (the real meshes of
+# ../shared/data/meshes, or $MVGRASP_SHARED_DATA/meshes, outside random_urdfs) is made when
+# that folder is there; it only adds test figures to the reports, never chooses weights.
+set -euo pipefail
+
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+cd "$root"
+python=${PYTHON:-}
+if [[ -z $python ]]; then
+    if [[ -x .venv/bin/python ]]; then python=.venv/bin/python; else python=python3; fi
+fi
+shared=${MVGRASP_SHARED_DATA:-$root/../shared/data}
+# The training package from this checkout, installed or not.
+export PYTHONPATH="$root/training${PYTHONPATH:+:$PYTHONPATH}"
+quick=${QUICK:-0}
+
+if [[ $quick == 1 ]]; then
+    work=$(mktemp -d)
+    data=$work/datasets
+    runs=$work/runs
+    per_category=1
+else
+    data=$root/../datasets
+    runs=$root/../runs
+    per_category=20
+fi
+echo "datasets: $data; runs: $runs; python: $python"
+
+cargo build --release --quiet --bin grasp_dataset
+generator=target/release/grasp_dataset
+
+test_meshes=()
+if [[ -d $shared/meshes && $quick != 1 ]]; then
+    for folder in "$shared"/meshes/*; do
+        [[ -d $folder ]] || continue
+        if [[ $(basename "$folder") == pybullet ]]; then
+            for sub in "$folder"/*; do
+                [[ $(basename "$sub") == random_urdfs ]] && continue
+                [[ -d $sub || $sub == *.obj || $sub == *.urdf || $sub == *.stl ]] && test_meshes+=(--mesh "$sub")
+            done
+        else
+            test_meshes+=(--mesh "$folder")
+        fi
+    done
+fi
+
+for kind in topdown multiview; do
+    config=training/configs/datasets/$kind.toml
+    "$generator" --quiet --per-category "$per_category" --config "$config" --out "$data/$kind/train"
+    if [[ ${#test_meshes[@]} -gt 0 ]]; then
+        "$generator" --quiet --config "$config" "${test_meshes[@]}" --out "$data/$kind/test"
+    fi
+done
+
+# The training configs, with the dataset folder (and for QUICK=1 the epochs) of this run.
+for name in gqcnn_small_topdown gqcnn_small_multiview; do
+    kind=${name#gqcnn_small_}
+    config=$runs/$name.toml
+    mkdir -p "$runs"
+    edits=(-e "s|^dataset_dir = .*|dataset_dir = \"$data/$kind/train\"|")
+    [[ $quick == 1 ]] && edits+=(-e "s|^epochs = .*|epochs = 1|")
+    sed "${edits[@]}" "training/configs/$name.toml" > "$config"
+    test_args=()
+    [[ -d $data/$kind/test ]] && test_args=(--test-dataset "$data/$kind/test")
+    "$python" -m mvgrasp_training.train "$config" --out "$runs/$name" "${test_args[@]}" \
+        > "$runs/$name.log" 2>&1 &
+done
+wait
+for name in gqcnn_small_topdown gqcnn_small_multiview; do
+    [[ -f $runs/$name/$name.json ]] || { echo "training $name failed: see $runs/$name.log" >&2; exit 1; }
+done
+
+if [[ $quick == 1 ]]; then
+    echo "QUICK=1: exports in $runs (models/ unchanged)"
+    exit 0
+fi
+for name in gqcnn_small_topdown gqcnn_small_multiview; do
+    cp "$runs/$name/$name.json" "$runs/$name/$name.safetensors" models/
+    cp "$runs/$name/learning_curve.png" "models/$name.png"
+done
+"$python" training/scripts/make_parity_fixtures.py
+echo "models/ rewritten; next: cargo test (parity with torch), then re-measure models/README.md and the README's figures"
