@@ -53,6 +53,9 @@ struct Args {
     /// scaled crops by the focal ratio), for comparison.
     #[arg(long)]
     unscaled_crops: bool,
+    /// Return the best-scored grasp without the hand check against the observed depth.
+    #[arg(long)]
+    no_hand_check: bool,
 }
 
 #[derive(Default)]
@@ -116,6 +119,7 @@ fn run(args: &Args) -> Result<(), String> {
             let mut params = PlanParams {
                 max_views: *views,
                 intrinsics: Intrinsics::preset(preset),
+                hand_check: !args.no_hand_check,
                 ..Default::default()
             };
             params.views.radius_m = *radius_m;

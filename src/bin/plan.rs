@@ -50,6 +50,9 @@ struct Args {
     /// Skip the physics trial of the chosen grasp.
     #[arg(long)]
     no_physics: bool,
+    /// Return the best-scored grasp without checking the open hand against the observed depth.
+    #[arg(long)]
+    no_hand_check: bool,
     /// Graphics backend: auto, vulkan, gl, metal, dx12 (or MVGRASP_RENDER_BACKEND).
     #[arg(long, default_value = "auto")]
     backend: String,
@@ -104,6 +107,7 @@ fn run(args: &Args) -> Result<(), String> {
         stable_pose: args.stable_pose,
         seed: args.object.seed,
         physics: !args.no_physics,
+        hand_check: !args.no_hand_check,
         ..Default::default()
     };
     params.views.radius_m = args.distance_m.unwrap_or(setting.distance_m);
@@ -185,6 +189,17 @@ fn summary(model: &str, net: &Gqcnn, plan: &PlanReport, distance_m: f32) -> Stri
         );
         return s;
     };
+    let r = &plan.rejections;
+    if r.total() > 0 {
+        let _ = writeln!(
+            s,
+            "rejected {} candidates before the best: the open hand meets observed depth ({}), \
+             contacts off the observed surface ({})",
+            r.total(),
+            r.hand_meets_observed_depth,
+            r.contact_off_surface
+        );
+    }
     let p = best.grasp.center();
     let _ = writeln!(
         s,

@@ -14,7 +14,10 @@ use serde::Serialize;
 use crate::error::Result;
 use crate::grasp_dataset::GraspDatasetConfig;
 use crate::grasp_dataset::object::render_depths;
-use mvgrasp_planner::{GqcnnPolicy, ScoredGrasp, View};
+use mvgrasp_planner::{GqcnnPolicy, Rejections, ScoredGrasp, View};
+
+/// The best candidates a report lists (and the hand check makes sure of).
+const TOP_KEPT: usize = 10;
 
 /// What [`plan_grasp`] does.
 #[derive(Clone, Debug)]
@@ -36,6 +39,10 @@ pub struct PlanParams {
     pub labels: GraspDatasetConfig,
     /// Run the rapier trial on the best grasp.
     pub physics: bool,
+    /// Before a grasp is returned, reject candidates whose open hand meets a point some view
+    /// observed, or whose contacts are off the observed surface
+    /// ([`mvgrasp_planner::Plan::reject_colliding`]).
+    pub hand_check: bool,
 }
 
 impl Default for PlanParams {
@@ -50,6 +57,7 @@ impl Default for PlanParams {
             seed: 0,
             labels,
             physics: true,
+            hand_check: true,
         }
     }
 }
@@ -104,6 +112,8 @@ pub struct PlanReport {
     pub analytic: Option<AnalyticCheck>,
     /// The rapier trial of the best grasp (close, lift, shake).
     pub physics: Option<PhysicsOutcome>,
+    /// Candidates rejected before the best was chosen, by reason (the hand check).
+    pub rejections: Rejections,
     /// Wall-clock times (not in the JSON, which is the same bytes for the same seed).
     #[serde(skip)]
     pub timings: PlanTimings,
@@ -221,7 +231,10 @@ pub fn plan_grasp(
     let render_s = started.elapsed().as_secs_f64();
 
     let started = Instant::now();
-    let plan = policy.plan(&scene.views, params.seed)?;
+    let mut plan = policy.plan(&scene.views, params.seed)?;
+    if params.hand_check {
+        plan.reject_colliding(&scene.views, &params.labels.gripper()?, TOP_KEPT);
+    }
     let plan_s = started.elapsed().as_secs_f64();
 
     let started = Instant::now();
@@ -252,7 +265,8 @@ pub fn plan_grasp(
         table_from_object: scene.table_from_object,
         best_paper: best.map(|b| b.grasp.to_paper()),
         best,
-        top: plan.candidates.iter().take(10).copied().collect(),
+        top: plan.candidates.iter().take(TOP_KEPT).copied().collect(),
+        rejections: plan.rejections,
         candidates: plan.candidates,
         analytic,
         physics,

@@ -2,7 +2,7 @@
 //! network, lifted to the world, best first (the seed paper's multi-view policy; with one
 //! top-down view, Dex-Net 2.0's).
 
-use mvgrasp_grasp::{Grasp, ImageGrasp};
+use mvgrasp_grasp::{Grasp, Gripper, ImageGrasp};
 use mvgrasp_infer::{Gqcnn, GqcnnWorkspace, Tensor};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -11,6 +11,7 @@ use crate::contract::InputContract;
 use crate::crop::crop_depth;
 use crate::depth_image::View;
 use crate::error::{PlannerError, Result};
+use crate::hand_check::{Rejections, check_hand};
 use crate::sampler::{ImageSamplerParams, sample_image_grasps};
 use crate::seed::splitmix;
 
@@ -33,13 +34,44 @@ pub struct ScoredGrasp {
 #[derive(Clone, Debug, Serialize)]
 pub struct Plan {
     /// Every scored candidate of every view, best first (ties: lower view, then sampling
-    /// order).
+    /// order), less those [`Plan::reject_colliding`] dropped.
     pub candidates: Vec<ScoredGrasp>,
-    /// Candidates per view.
+    /// Candidates per view, as sampled.
     pub candidates_per_view: Vec<usize>,
+    /// The candidates dropped by [`Plan::reject_colliding`], by reason.
+    pub rejections: Rejections,
 }
 
 impl Plan {
+    /// Checks the candidates best first against every view ([`check_hand`]: the open hand on
+    /// its approach and at the grasp must meet no observed point, the contacts must lie on
+    /// observed surface), dropping those that fail, until `keep` have survived; the rest stay
+    /// in order, unchecked. Returns the rejections (also kept in [`Plan::rejections`]).
+    pub fn reject_colliding(
+        &mut self,
+        views: &[View],
+        gripper: &Gripper,
+        keep: usize,
+    ) -> Rejections {
+        let mut kept = Vec::with_capacity(self.candidates.len());
+        let mut survivors = 0;
+        for candidate in std::mem::take(&mut self.candidates) {
+            if survivors >= keep {
+                kept.push(candidate);
+                continue;
+            }
+            match check_hand(&candidate, views, gripper) {
+                Some(rejection) => self.rejections.add(rejection),
+                None => {
+                    survivors += 1;
+                    kept.push(candidate);
+                }
+            }
+        }
+        self.candidates = kept;
+        self.rejections
+    }
+
     /// The best grasp, if any view had a candidate.
     pub fn best(&self) -> Option<&ScoredGrasp> {
         self.candidates.first()
@@ -117,6 +149,7 @@ impl GqcnnPolicy {
         Ok(Plan {
             candidates,
             candidates_per_view,
+            rejections: Rejections::default(),
         })
     }
 

@@ -1,0 +1,222 @@
+//! The open hand against what the cameras saw: a candidate is rejected when the gripper, open
+//! and coming in straight along its approach from `approach_distance_m` back, would pass
+//! through a point that some view observed (the object or the table), or when its contacts do
+//! not lie on observed surface. Depth alone: no mesh is needed.
+
+use mvgrasp_geometry::Vec3;
+use mvgrasp_grasp::{Gripper, HandShapes};
+use serde::Serialize;
+
+use crate::depth_image::View;
+use crate::policy::ScoredGrasp;
+
+/// A point must lie this far inside a hand box to count as met (rendered and sensed surfaces
+/// touch the boxes' faces to within a pixel's rounding), metres.
+const INSIDE_TOLERANCE_M: f32 = 0.001;
+
+/// Why a candidate was rejected.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Rejection {
+    /// The open hand, on its approach or at the grasp, meets an observed point.
+    HandMeetsObservedDepth,
+    /// A contact's pixel has no depth in the view the grasp was planned in.
+    ContactOffSurface,
+}
+
+/// How many candidates were rejected, by reason.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct Rejections {
+    /// See [`Rejection::HandMeetsObservedDepth`].
+    pub hand_meets_observed_depth: usize,
+    /// See [`Rejection::ContactOffSurface`].
+    pub contact_off_surface: usize,
+}
+
+impl Rejections {
+    /// Counts one rejection.
+    pub fn add(&mut self, rejection: Rejection) {
+        match rejection {
+            Rejection::HandMeetsObservedDepth => self.hand_meets_observed_depth += 1,
+            Rejection::ContactOffSurface => self.contact_off_surface += 1,
+        }
+    }
+
+    /// All of them.
+    pub fn total(&self) -> usize {
+        self.hand_meets_observed_depth + self.contact_off_surface
+    }
+}
+
+/// Checks `candidate` against every view: `None` when it survives, else why not. The hand is
+/// `gripper`'s boxes, open to its widest, swept back along -z by its approach distance.
+pub fn check_hand(candidate: &ScoredGrasp, views: &[View], gripper: &Gripper) -> Option<Rejection> {
+    if let Some(view) = views.get(candidate.view)
+        && !contacts_observed(candidate, view)
+    {
+        return Some(Rejection::ContactOffSurface);
+    }
+    let hand = HandShapes::new(gripper, gripper.max_opening_m, gripper.approach_distance_m);
+    let gripper_from_world = candidate.grasp.world_from_gripper.inverse();
+    views
+        .iter()
+        .any(|view| meets_observed_depth(&hand, &gripper_from_world, view))
+        .then_some(Rejection::HandMeetsObservedDepth)
+}
+
+/// Whether both contact pixels (the grasp's width apart along its axis, at its depth) have
+/// depth.
+fn contacts_observed(candidate: &ScoredGrasp, view: &View) -> bool {
+    let image = &candidate.image;
+    let k = view.depth.intrinsics();
+    if image.depth_m <= 0.0 {
+        return false;
+    }
+    let half_px = image.width_m / 2.0 * k.fx / image.depth_m;
+    let (sin, cos) = image.angle_rad.sin_cos();
+    [-1.0f32, 1.0].iter().all(|side| {
+        let u = image.center_px[0] + side * half_px * cos;
+        let v = image.center_px[1] + side * half_px * sin;
+        view.depth.at(u.round() as i64, v.round() as i64) > 0.0
+    })
+}
+
+/// Whether a point `view` observed lies inside one of the hand's boxes.
+fn meets_observed_depth(
+    hand: &HandShapes,
+    gripper_from_world: &mvgrasp_geometry::Pose3,
+    view: &View,
+) -> bool {
+    let gripper_from_camera = *gripper_from_world * view.camera.world_from_camera;
+    let camera_from_gripper = gripper_from_camera.inverse();
+    let k = view.depth.intrinsics();
+    hand.boxes().iter().any(|(cuboid, box_pose)| {
+        let half = cuboid.half_extents - Vec3::splat(INSIDE_TOLERANCE_M);
+        if half.min_element() <= 0.0 {
+            return false;
+        }
+        // The pixels the box can cover: its corners projected (the whole image when a corner
+        // is behind the camera).
+        let (mut lo, mut hi) = ([f32::INFINITY; 2], [f32::NEG_INFINITY; 2]);
+        for corner in 0..8 {
+            let sign = |bit: u32| if corner >> bit & 1 == 1 { 1.0 } else { -1.0 };
+            let local = Vec3::new(sign(0) * half.x, sign(1) * half.y, sign(2) * half.z);
+            let in_camera = camera_from_gripper.transform_point(box_pose.transform_point(local));
+            match k.project(in_camera) {
+                Some([u, v]) => {
+                    lo = [lo[0].min(u), lo[1].min(v)];
+                    hi = [hi[0].max(u), hi[1].max(v)];
+                }
+                None => {
+                    lo = [0.0, 0.0];
+                    hi = [k.width as f32, k.height as f32];
+                    break;
+                }
+            }
+        }
+        let clamp_u = |x: f32| x.clamp(0.0, k.width.saturating_sub(1) as f32) as i64;
+        let clamp_v = |y: f32| y.clamp(0.0, k.height.saturating_sub(1) as f32) as i64;
+        let (u0, u1) = (clamp_u(lo[0].floor()), clamp_u(hi[0].ceil()));
+        let (v0, v1) = (clamp_v(lo[1].floor()), clamp_v(hi[1].ceil()));
+        let box_from_camera = box_pose.inverse() * gripper_from_camera;
+        (v0..=v1).any(|v| {
+            (u0..=u1).any(|u| {
+                let d = view.depth.at(u, v);
+                if d <= 0.0 {
+                    return false;
+                }
+                let p = box_from_camera.transform_point(k.unproject(u as f32, v as f32, d));
+                p.x.abs() < half.x && p.y.abs() < half.y && p.z.abs() < half.z
+            })
+        })
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::depth_image::DepthImage;
+    use mvgrasp_geometry::{Camera, Intrinsics, IntrinsicsPreset};
+    use mvgrasp_grasp::ImageGrasp;
+
+    /// A 4 cm x 12 cm box 5 cm tall on a table, 0.7 m below a camera looking straight down,
+    /// with the table 2 cm around the box left unobserved where `hole` is set.
+    fn scene(hole: bool) -> View {
+        let k = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
+        let mut depth = Vec::new();
+        for v in 0..k.height {
+            for u in 0..k.width {
+                let (x, y) = (
+                    (u as f32 - k.cx) * 0.65 / k.fx,
+                    (v as f32 - k.cy) * 0.65 / k.fy,
+                );
+                depth.push(if x.abs() < 0.02 && y.abs() < 0.06 {
+                    0.65
+                } else if hole && x.abs() < 0.04 && y.abs() < 0.08 {
+                    0.0
+                } else {
+                    0.7
+                });
+            }
+        }
+        let camera = Camera::look_at(
+            k,
+            Vec3::new(0.0, 0.0, 0.7),
+            Vec3::ZERO,
+            Vec3::new(0.0, -1.0, 0.0),
+        )
+        .unwrap();
+        View::new(0, camera, DepthImage::new(k, depth).unwrap()).unwrap()
+    }
+
+    fn candidate(view: &View, angle_rad: f32, depth_m: f32, width_m: f32) -> ScoredGrasp {
+        let k = view.depth.intrinsics();
+        let image = ImageGrasp {
+            center_px: [k.cx, k.cy],
+            angle_rad,
+            depth_m,
+            width_m,
+        };
+        ScoredGrasp {
+            view: 0,
+            image,
+            grasp: image.to_world(&view.camera),
+            theta_rad: view.theta_rad(),
+            quality: 0.9,
+        }
+    }
+
+    #[test]
+    fn the_open_hand_must_clear_what_the_camera_saw() {
+        let view = scene(false);
+        let views = [view.clone()];
+        let panda = Gripper::default();
+        // Across the 4 cm side, 2 cm below the top: the open fingers (8 cm) come down on the
+        // table beside the box, clear of it, and stop 3 cm above the table.
+        let across = candidate(&view, 0.0, 0.67, 0.04);
+        assert_eq!(check_hand(&across, &views, &panda), None);
+        // Along the 12 cm side the open fingers land on the box's top.
+        let along = candidate(&view, std::f32::consts::FRAC_PI_2, 0.67, 0.12);
+        assert_eq!(
+            check_hand(&along, &views, &panda),
+            Some(Rejection::HandMeetsObservedDepth)
+        );
+        // Across, but so deep that the fingertips go through the table.
+        let deep = candidate(&view, 0.0, 0.73, 0.04);
+        assert_eq!(
+            check_hand(&deep, &views, &panda),
+            Some(Rejection::HandMeetsObservedDepth)
+        );
+    }
+
+    #[test]
+    fn contacts_must_lie_on_observed_surface() {
+        let view = scene(true);
+        // The jaws 6 cm apart: the contact pixels fall in the unobserved ring around the box.
+        let off = candidate(&view, 0.0, 0.67, 0.06);
+        assert_eq!(
+            check_hand(&off, &[view], &Gripper::default()),
+            Some(Rejection::ContactOffSurface)
+        );
+    }
+}
