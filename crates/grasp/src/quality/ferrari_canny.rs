@@ -66,10 +66,10 @@ pub(crate) fn epsilon_checked(
 /// nearest facet, or 0 when the origin is on or outside one.
 ///
 /// The reference the grasp metric is tested against, for sets of a few contacts: it costs
-/// `C(n, 6) n` small products (4 ms for the 20 wrenches of a Dex-Net grasp). Sets of fewer
-/// than seven or more than [`MAX_BRUTE_FORCE_WRENCHES`] wrenches, flat sets, non-finite
-/// wrenches and distances under 1e-7 of the largest wrench's norm (roundoff on a flat set)
-/// give 0.
+/// `C(n, 6) n` small products (38,760 hyperplanes for the 20 wrenches of a Dex-Net grasp).
+/// Sets of fewer than seven or more than [`MAX_BRUTE_FORCE_WRENCHES`] wrenches, flat sets,
+/// non-finite wrenches and distances under 1e-7 of the largest wrench's norm (roundoff on a
+/// flat set) give 0.
 pub fn wrench_set_epsilon(wrenches: &[[f64; WRENCH_DIM]]) -> f64 {
     let n = wrenches.len();
     if !(WRENCH_DIM + 1..=MAX_BRUTE_FORCE_WRENCHES).contains(&n)
@@ -82,15 +82,12 @@ pub fn wrench_set_epsilon(wrenches: &[[f64; WRENCH_DIM]]) -> f64 {
         .map(|w| w.iter().map(|x| x * x).sum::<f64>())
         .fold(0.0, f64::max)
         .sqrt();
-    if largest.is_nan() || largest <= 0.0 {
+    if largest <= 0.0 {
         return 0.0;
     }
     let on_plane = 1e-9 * largest;
     let mut nearest = f64::INFINITY;
-    let mut subset = [0usize; WRENCH_DIM];
-    for (i, slot) in subset.iter_mut().enumerate() {
-        *slot = i;
-    }
+    let mut subset: [usize; WRENCH_DIM] = std::array::from_fn(|i| i);
     loop {
         if let Some((normal, offset)) = hyperplane(wrenches, &subset) {
             let (mut above, mut below) = (false, false);

@@ -31,8 +31,7 @@
 //! This replaced qhull (a general hull, as the fallback and the reference) and is tested
 //! against 400 of its results on real contact pairs (`tests/fixtures/qhull_epsilons.json`,
 //! written by `examples/qhull_fixture.rs` at commit be65717, while the crate still linked
-//! qhull), and against the
-//! brute-force hull of [`crate::quality::wrench_set_epsilon`].
+//! qhull), and against the brute-force hull of [`crate::quality::wrench_set_epsilon`].
 
 use glam::DVec3;
 use mvgrasp_geometry::Vec3;
@@ -225,7 +224,7 @@ fn largest_vertex_epsilon(parts: &[ContactRows], patterns: &[ConePattern], k: us
 /// one-dimensional null space whose direction, in one sense, keeps every row `<= 0`.
 fn polar_is_unbounded(parts: &[ContactRows], patterns: &[ConePattern], k: usize) -> bool {
     let mut all: Vec<Row> = parts.iter().flat_map(|p| p.rows()).copied().collect();
-    if echelon(&mut all).len() < WRENCH_DIM {
+    if echelon(&mut all).1 < WRENCH_DIM {
         return true;
     }
     let scale = parts
@@ -255,11 +254,10 @@ fn polar_is_unbounded(parts: &[ContactRows], patterns: &[ConePattern], k: usize)
                     };
                     for sign in [1.0, -1.0] {
                         let ray = d.map(|x| sign * x);
-                        let is_ray = parts.iter().flat_map(|p| p.rows()).all(|row| {
-                            let value: f64 =
-                                row[..WRENCH_DIM].iter().zip(&ray).map(|(r, x)| r * x).sum();
-                            value <= slack
-                        });
+                        let is_ray = parts
+                            .iter()
+                            .flat_map(|p| p.rows())
+                            .all(|row| lhs_dot(row, &ray) <= slack);
                         if is_ray {
                             return true;
                         }
@@ -271,10 +269,16 @@ fn polar_is_unbounded(parts: &[ContactRows], patterns: &[ConePattern], k: usize)
     false
 }
 
-/// Row-reduces the left-hand sides of `rows` in place (partial pivoting, columns in order) and
-/// returns the pivot column of each of the first `rank` rows.
-fn echelon(rows: &mut [Row]) -> Vec<usize> {
-    let mut pivots = Vec::with_capacity(WRENCH_DIM);
+/// `a . y` over the left-hand side of the row `a`.
+fn lhs_dot(row: &Row, y: &[f64; WRENCH_DIM]) -> f64 {
+    row[..WRENCH_DIM].iter().zip(y).map(|(a, b)| a * b).sum()
+}
+
+/// Row-reduces `rows` in place (partial pivoting, columns in order; the right-hand sides are
+/// carried along) and returns the pivot column of each of the first `rank` rows, and `rank`.
+/// Pivots at or below [`PIVOT_TOLERANCE`] count as zero.
+fn echelon(rows: &mut [Row]) -> ([usize; WRENCH_DIM], usize) {
+    let mut pivots = [0; WRENCH_DIM];
     let mut r = 0;
     for col in 0..WRENCH_DIM {
         if r == rows.len() {
@@ -298,19 +302,20 @@ fn echelon(rows: &mut [Row]) -> Vec<usize> {
                 }
             }
         }
-        pivots.push(col);
+        pivots[r] = col;
         r += 1;
     }
-    pivots
+    (pivots, r)
 }
 
 /// The unit direction spanning the null space of the left-hand sides of `rows` when it is
 /// one-dimensional (rank exactly 5), else `None`.
 pub(crate) fn null_direction(rows: &mut [Row]) -> Option<[f64; WRENCH_DIM]> {
-    let pivots = echelon(rows);
-    if pivots.len() != WRENCH_DIM - 1 {
+    let (pivots, rank) = echelon(rows);
+    if rank != WRENCH_DIM - 1 {
         return None;
     }
+    let pivots = &pivots[..rank];
     let free = (0..WRENCH_DIM).find(|c| !pivots.contains(c))?;
     let mut d = [0.0; WRENCH_DIM];
     d[free] = 1.0;
@@ -346,37 +351,21 @@ fn push_pattern(
 
 /// Whether `y` satisfies every constraint of both contacts.
 fn feasible(y: &[f64; WRENCH_DIM], parts: &[ContactRows]) -> bool {
-    let ok = |row: &Row| {
-        let value: f64 = row[..WRENCH_DIM].iter().zip(y).map(|(a, b)| a * b).sum();
-        value <= row[WRENCH_DIM] + FEASIBILITY_TOLERANCE
-    };
     parts
         .iter()
-        .all(|part| part.cone.iter().all(ok) && part.torsion.iter().all(ok))
+        .flat_map(|part| part.rows())
+        .all(|row| lhs_dot(row, y) <= row[WRENCH_DIM] + FEASIBILITY_TOLERANCE)
 }
 
 /// The unique solution of the equations in `rows` (6 unknowns, 6 to 8 rows), or `None` when
-/// they do not have rank 6 or contradict each other. Gaussian elimination with partial
-/// pivoting, in place.
+/// they do not have rank 6 or contradict each other. Row-reduced in place ([`echelon`]), then
+/// solved back to front.
 fn solve(rows: &mut [Row]) -> Option<[f64; WRENCH_DIM]> {
-    let m = rows.len();
-    for col in 0..WRENCH_DIM {
-        let pivot = (col..m).max_by(|&i, &j| rows[i][col].abs().total_cmp(&rows[j][col].abs()))?;
-        if rows[pivot][col].abs() <= PIVOT_TOLERANCE {
-            return None;
-        }
-        rows.swap(col, pivot);
-        let head = rows[col];
-        for row in rows.iter_mut().skip(col + 1) {
-            let factor = row[col] / head[col];
-            if factor != 0.0 {
-                for (x, h) in row.iter_mut().zip(head.iter()).skip(col) {
-                    *x -= factor * h;
-                }
-            }
-        }
+    if echelon(rows).1 < WRENCH_DIM {
+        return None;
     }
-    // Extra equations must be consistent (reduced to 0 = 0).
+    // Rank 6: the pivots are the columns in order. Extra equations must be consistent
+    // (reduced to 0 = 0).
     if rows[WRENCH_DIM..]
         .iter()
         .any(|row| row[WRENCH_DIM].abs() > 1e-9)
@@ -399,7 +388,8 @@ mod tests {
     use crate::quality::wrench::{TorsionModel, contact_wrenches_at};
     use serde::Deserialize;
 
-    /// One case of `tests/fixtures/qhull_epsilons.json` (written by `examples/qhull_fixture.rs` at commit be65717).
+    /// One case of `tests/fixtures/qhull_epsilons.json` (written by `examples/qhull_fixture.rs`
+    /// at commit be65717).
     #[derive(Deserialize)]
     struct Case {
         center_of_mass: Vec3,
