@@ -24,20 +24,14 @@ pub struct InputContract {
     pub crop: CropParams,
     /// Focal length of the training camera, pixels.
     pub focal_px: f32,
-    /// Distances of the training cameras from the object, metres.
-    pub camera_distance_m: [f32; 2],
-    /// Whether the network's export recorded it; `false`: the grasp datasets' defaults, which
-    /// the exports made before the contract was recorded were trained on.
-    pub recorded: bool,
 }
 
 impl InputContract {
-    /// The contract of `net`: the one its export recorded, else the grasp datasets' defaults
-    /// (Dex-Net 2.0's 96-pixel window scaled to 32 x 32, on the PhoXi S at fx = 552.5; cameras
-    /// 0.65 to 0.75 m away for a top-down network, 0.5 to 0.75 m for a multi-view one), which
-    /// a network taking other crops does not fit.
+    /// The contract of `net`: the crops its export recorded, else the grasp datasets' defaults
+    /// (Dex-Net 2.0's 96-pixel window scaled to 32 x 32, on the PhoXi S at fx = 552.5), which
+    /// the exports made before the contract was recorded were trained on, and which a network
+    /// taking other crops does not fit.
     pub fn of(net: &Gqcnn) -> Self {
-        let arch = net.architecture();
         match net.input_spec() {
             Some(spec) => Self {
                 crop: CropParams {
@@ -45,18 +39,10 @@ impl InputContract {
                     size_px: spec.crop_size_px,
                 },
                 focal_px: spec.focal_px,
-                camera_distance_m: spec.camera_distance_m,
-                recorded: true,
             },
             None => Self {
                 crop: CropParams::default(),
-                focal_px: Intrinsics::preset(mvgrasp_geometry::IntrinsicsPreset::PhoxiS).fx,
-                camera_distance_m: if arch.pose_inputs >= 2 {
-                    [0.5, 0.75]
-                } else {
-                    [0.65, 0.75]
-                },
-                recorded: false,
+                focal_px: Intrinsics::phoxi_s().fx,
             },
         }
     }
@@ -98,27 +84,13 @@ mod tests {
     use super::*;
     use crate::crop::crop_depth;
     use crate::depth_image::DepthImage;
+    use crate::test_scenes::box_on_table;
     use mvgrasp_geometry::IntrinsicsPreset;
 
     /// A 4 cm x 6 cm box 5 cm tall on a table 0.7 m below a camera looking straight down,
-    /// as `intrinsics` sees it (exact per-pixel depth).
+    /// as `intrinsics` sees it.
     fn box_seen_by(intrinsics: Intrinsics) -> DepthImage {
-        let k = intrinsics;
-        let mut depth = Vec::with_capacity((k.width * k.height) as usize);
-        for v in 0..k.height {
-            for u in 0..k.width {
-                let (x, y) = (
-                    (u as f32 - k.cx) * 0.65 / k.fx,
-                    (v as f32 - k.cy) * 0.65 / k.fy,
-                );
-                depth.push(if x.abs() < 0.02 && y.abs() < 0.03 {
-                    0.65
-                } else {
-                    0.7
-                });
-            }
-        }
-        DepthImage::new(k, depth).unwrap()
+        box_on_table(intrinsics, [0.02, 0.03], None)
     }
 
     fn mean_abs_difference(a: &[f32], b: &[f32]) -> f32 {
@@ -132,8 +104,6 @@ mod tests {
         let contract = InputContract {
             crop: CropParams::default(),
             focal_px: 552.5,
-            camera_distance_m: [0.65, 0.75],
-            recorded: true,
         };
         let phoxi = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
         let realsense = Intrinsics::preset(IntrinsicsPreset::RealsenseD435);
@@ -165,8 +135,6 @@ mod tests {
         let contract = InputContract {
             crop: CropParams::default(),
             focal_px: 552.5,
-            camera_distance_m: [0.65, 0.75],
-            recorded: false,
         };
         let mut k = Intrinsics::preset(IntrinsicsPreset::Primesense);
         assert_eq!(contract.crop_for(&k).unwrap().window_px, 91);

@@ -95,17 +95,15 @@ impl View {
     /// A view of `depth` through `camera`.
     ///
     /// # Errors
-    /// [`PlannerError::ViewMismatch`] when the image's size is not the camera's (`view` names
-    /// it in the message).
+    /// [`PlannerError::ViewMismatch`] when the image was made with other intrinsics than the
+    /// camera's (`view` names it in the message): the planner crops with the camera's and
+    /// unprojects with the image's, so the two must be one.
     pub fn new(view: usize, camera: Camera, depth: DepthImage) -> Result<Self> {
-        let k = &camera.intrinsics;
-        if (k.width, k.height) != (depth.width(), depth.height()) {
+        if camera.intrinsics != *depth.intrinsics() {
             return Err(PlannerError::ViewMismatch {
                 view,
-                depth_width: depth.width(),
-                depth_height: depth.height(),
-                camera_width: k.width,
-                camera_height: k.height,
+                depth: *depth.intrinsics(),
+                camera: camera.intrinsics,
             });
         }
         Ok(Self { camera, depth })
@@ -144,5 +142,27 @@ mod tests {
         assert_eq!(image.at(-1, 0), 0.0);
         assert_eq!(image.at(3, 0), 0.5);
         assert_eq!(image.at(i64::from(k.width), 0), 0.0);
+    }
+
+    #[test]
+    fn a_view_needs_the_image_of_its_own_camera() {
+        let phoxi = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
+        let camera = Camera::look_at(
+            phoxi,
+            mvgrasp_geometry::Vec3::new(0.0, 0.0, 0.7),
+            mvgrasp_geometry::Vec3::ZERO,
+            mvgrasp_geometry::Vec3::Y,
+        )
+        .unwrap();
+        let n = (phoxi.width * phoxi.height) as usize;
+        assert!(View::new(0, camera, DepthImage::new(phoxi, vec![0.7; n]).unwrap()).is_ok());
+        // Same size, another focal length: refused, naming the view.
+        let other = Intrinsics {
+            fx: 500.0,
+            fy: 500.0,
+            ..phoxi
+        };
+        let err = View::new(3, camera, DepthImage::new(other, vec![0.7; n]).unwrap()).unwrap_err();
+        assert!(err.to_string().starts_with("view 3:"), "{err}");
     }
 }

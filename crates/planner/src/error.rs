@@ -18,20 +18,18 @@ pub enum PlannerError {
     },
     /// A view whose depth image was made with other intrinsics than its camera's.
     #[error(
-        "view {view}: the depth image is {depth_width} x {depth_height} pixels, the camera's \
-         {camera_width} x {camera_height}"
+        "view {view}: the depth image's intrinsics (fx {}, fy {}, cx {}, cy {}, {} x {}) are not \
+         the camera's (fx {}, fy {}, cx {}, cy {}, {} x {})",
+        depth.fx, depth.fy, depth.cx, depth.cy, depth.width, depth.height,
+        camera.fx, camera.fy, camera.cx, camera.cy, camera.width, camera.height
     )]
     ViewMismatch {
         /// The view.
         view: usize,
-        /// The depth image's size.
-        depth_width: u32,
-        /// See `depth_width`.
-        depth_height: u32,
-        /// The camera's size.
-        camera_width: u32,
-        /// See `camera_width`.
-        camera_height: u32,
+        /// The depth image's intrinsics.
+        depth: mvgrasp_geometry::Intrinsics,
+        /// The camera's.
+        camera: mvgrasp_geometry::Intrinsics,
     },
     /// A network the planner cannot feed.
     #[error(

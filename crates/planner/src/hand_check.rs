@@ -135,7 +135,7 @@ fn meets_observed_depth(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::depth_image::DepthImage;
+    use crate::test_scenes::box_on_table;
     use mvgrasp_geometry::{Camera, Intrinsics, IntrinsicsPreset};
     use mvgrasp_grasp::ImageGrasp;
 
@@ -143,22 +143,7 @@ mod tests {
     /// with the table 2 cm around the box left unobserved where `hole` is set.
     fn scene(hole: bool) -> View {
         let k = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
-        let mut depth = Vec::new();
-        for v in 0..k.height {
-            for u in 0..k.width {
-                let (x, y) = (
-                    (u as f32 - k.cx) * 0.65 / k.fx,
-                    (v as f32 - k.cy) * 0.65 / k.fy,
-                );
-                depth.push(if x.abs() < 0.02 && y.abs() < 0.06 {
-                    0.65
-                } else if hole && x.abs() < 0.04 && y.abs() < 0.08 {
-                    0.0
-                } else {
-                    0.7
-                });
-            }
-        }
+        let depth = box_on_table(k, [0.02, 0.06], hole.then_some([0.04, 0.08]));
         let camera = Camera::look_at(
             k,
             Vec3::new(0.0, 0.0, 0.7),
@@ -166,7 +151,7 @@ mod tests {
             Vec3::new(0.0, -1.0, 0.0),
         )
         .unwrap();
-        View::new(0, camera, DepthImage::new(k, depth).unwrap()).unwrap()
+        View::new(0, camera, depth).unwrap()
     }
 
     fn candidate(view: &View, angle_rad: f32, depth_m: f32, width_m: f32) -> ScoredGrasp {

@@ -9,6 +9,8 @@ pub mod models;
 pub mod policy;
 pub mod sampler;
 pub mod seed;
+#[cfg(test)]
+mod test_scenes;
 
 pub use contract::InputContract;
 pub use crop::{CropParams, crop_depth};

@@ -46,13 +46,8 @@ impl Plan {
     /// Checks the candidates best first against every view ([`check_hand`]: the open hand on
     /// its approach and at the grasp must meet no observed point, the contacts must lie on
     /// observed surface), dropping those that fail, until `keep` have survived; the rest stay
-    /// in order, unchecked. Returns the rejections (also kept in [`Plan::rejections`]).
-    pub fn reject_colliding(
-        &mut self,
-        views: &[View],
-        gripper: &Gripper,
-        keep: usize,
-    ) -> Rejections {
+    /// in order, unchecked. The rejections are counted in [`Plan::rejections`].
+    pub fn reject_colliding(&mut self, views: &[View], gripper: &Gripper, keep: usize) {
         let mut kept = Vec::with_capacity(self.candidates.len());
         let mut survivors = 0;
         for candidate in std::mem::take(&mut self.candidates) {
@@ -69,7 +64,6 @@ impl Plan {
             }
         }
         self.candidates = kept;
-        self.rejections
     }
 
     /// The best grasp, if any view had a candidate.

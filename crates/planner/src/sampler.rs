@@ -226,25 +226,13 @@ fn axis_angle_between(a: f32, b: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_scenes::box_on_table;
     use mvgrasp_geometry::{Intrinsics, IntrinsicsPreset};
 
     /// A 4 cm x 12 cm box, 5 cm tall, under a camera 0.7 m above the table (PhoXi S).
     fn box_image() -> (DepthImage, Intrinsics) {
         let k = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
-        let (w, h) = (k.width as usize, k.height as usize);
-        let mut depth = vec![0.7f32; w * h];
-        for v in 0..h {
-            for u in 0..w {
-                let (x, y) = (
-                    (u as f32 - k.cx) * 0.65 / k.fx,
-                    (v as f32 - k.cy) * 0.65 / k.fy,
-                );
-                if x.abs() < 0.02 && y.abs() < 0.06 {
-                    depth[v * w + u] = 0.65;
-                }
-            }
-        }
-        (DepthImage::new(k, depth).unwrap(), k)
+        (box_on_table(k, [0.02, 0.06], None), k)
     }
 
     #[test]

@@ -1,0 +1,33 @@
+//! Depth images the planner's unit tests share.
+
+use mvgrasp_geometry::Intrinsics;
+
+use crate::depth_image::DepthImage;
+
+/// A box `half_m` (x, y half extents, metres) and 5 cm tall on a table 0.7 m below a camera
+/// with `k` looking straight down, as that camera sees it (exact per-pixel depth). Where
+/// `unseen_m` is given, the table within those half extents around the box is missing (0).
+pub(crate) fn box_on_table(
+    k: Intrinsics,
+    half_m: [f32; 2],
+    unseen_m: Option<[f32; 2]>,
+) -> DepthImage {
+    let inside = |half: [f32; 2], x: f32, y: f32| x.abs() < half[0] && y.abs() < half[1];
+    let mut depth = Vec::with_capacity((k.width * k.height) as usize);
+    for v in 0..k.height {
+        for u in 0..k.width {
+            let (x, y) = (
+                (u as f32 - k.cx) * 0.65 / k.fx,
+                (v as f32 - k.cy) * 0.65 / k.fy,
+            );
+            depth.push(if inside(half_m, x, y) {
+                0.65
+            } else if unseen_m.is_some_and(|unseen| inside(unseen, x, y)) {
+                0.0
+            } else {
+                0.7
+            });
+        }
+    }
+    DepthImage::new(k, depth).unwrap()
+}
