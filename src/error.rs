@@ -147,7 +147,51 @@ pub enum Error {
     },
 }
 
+/// The domain an [`Error`] belongs to: what went wrong, in the terms of the Python binding's
+/// exception classes (one per domain).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ErrorKind {
+    /// A mesh, a camera or a stable pose.
+    Geometry,
+    /// Grasps and grippers.
+    Grasp,
+    /// Rendering.
+    Rendering,
+    /// A network's weights, or running it.
+    Weights,
+    /// Depth images, views or a network the planner cannot use.
+    Planning,
+    /// A dataset's config, folder, shards or manifest.
+    Dataset,
+    /// Reading, writing or encoding a file.
+    Io,
+}
+
 impl Error {
+    /// The domain of this error (every variant decides, so a new one must too).
+    pub fn kind(&self) -> ErrorKind {
+        match self {
+            Self::Geometry(_) => ErrorKind::Geometry,
+            Self::Grasp(_) => ErrorKind::Grasp,
+            Self::Render(_) => ErrorKind::Rendering,
+            Self::Infer(_) => ErrorKind::Weights,
+            Self::Planning(_) => ErrorKind::Planning,
+            Self::Io { .. } | Self::Png { .. } => ErrorKind::Io,
+            Self::ConfigFile { .. }
+            | Self::Toml { .. }
+            | Self::ConfigValue { .. }
+            | Self::Json { .. }
+            | Self::Safetensors { .. }
+            | Self::Format { .. }
+            | Self::NoObjects
+            | Self::DuplicateObject { .. }
+            | Self::NoSuchShard { .. }
+            | Self::ForeignDataset { .. }
+            | Self::ForeignShard { .. }
+            | Self::EmptyDataset { .. } => ErrorKind::Dataset,
+        }
+    }
+
     /// An [`Error::Io`] for `path`.
     pub(crate) fn io(
         op: &'static str,

@@ -17,7 +17,7 @@ pub mod grasp_image;
 pub mod planner;
 pub mod report;
 
-pub use error::{Error, Result};
+pub use error::{Error, ErrorKind, Result};
 pub use mvgrasp_geometry as geometry;
 pub use mvgrasp_grasp as grasp;
 pub use mvgrasp_infer as infer;

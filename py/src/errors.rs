@@ -15,7 +15,7 @@
 //! `Display` text, which names the file and the fault. A bad argument value (not a bad file)
 //! raises Python's own `ValueError`.
 
-use mvgrasp::Error;
+use mvgrasp::{Error, ErrorKind};
 use mvgrasp_geometry::GeometryError;
 use pyo3::PyErr;
 use pyo3::create_exception;
@@ -79,26 +79,18 @@ pub(crate) fn camera_error(error: GeometryError) -> PyErr {
     CameraError::new_err(error.to_string())
 }
 
-/// Maps a pipeline error onto the tree by its variant, always with the Rust message.
+/// Maps a pipeline error onto the tree by the Rust error's kind ([`Error::kind`]), always with
+/// its message; a geometry error as [`mesh_error`] does.
 pub(crate) fn pipeline_error(error: Error) -> PyErr {
     let message = error.to_string();
-    match error {
-        Error::Geometry(e) => mesh_error(e),
-        Error::Render(_) => RenderError::new_err(message),
-        Error::Infer(_) => WeightsError::new_err(message),
-        Error::Planning(_) => PlanningError::new_err(message),
-        Error::ConfigFile { .. }
-        | Error::Toml { .. }
-        | Error::ConfigValue { .. }
-        | Error::Json { .. }
-        | Error::Safetensors { .. }
-        | Error::Format { .. }
-        | Error::NoObjects
-        | Error::DuplicateObject { .. }
-        | Error::NoSuchShard { .. }
-        | Error::ForeignDataset { .. }
-        | Error::ForeignShard { .. }
-        | Error::EmptyDataset { .. } => DatasetError::new_err(message),
-        _ => MvGraspError::new_err(message),
+    match (error.kind(), error) {
+        (_, Error::Geometry(e)) => mesh_error(e),
+        (ErrorKind::Rendering, _) => RenderError::new_err(message),
+        (ErrorKind::Weights, _) => WeightsError::new_err(message),
+        (ErrorKind::Planning, _) => PlanningError::new_err(message),
+        (ErrorKind::Dataset, _) => DatasetError::new_err(message),
+        (ErrorKind::Geometry | ErrorKind::Grasp | ErrorKind::Io, _) => {
+            MvGraspError::new_err(message)
+        }
     }
 }

@@ -100,6 +100,8 @@ pub struct DatasetPlan {
     objects: Vec<(ManifestObject, ObjectSource)>,
     config: GraspDatasetConfig,
     resolved: Resolved,
+    /// See [`DatasetPlan::hash`].
+    hash: String,
 }
 
 impl DatasetPlan {
@@ -114,7 +116,7 @@ impl DatasetPlan {
             return Err(Error::NoObjects);
         }
         let names = unique_names(sources)?;
-        let objects = sources
+        let objects: Vec<(ManifestObject, ObjectSource)> = sources
             .iter()
             .zip(names)
             .enumerate()
@@ -129,6 +131,12 @@ impl DatasetPlan {
                 )
             })
             .collect();
+        let listed: Vec<&ManifestObject> = objects.iter().map(|(o, _)| o).collect();
+        let text = serde_json::to_string(&(config, listed)).map_err(|e| Error::ConfigValue {
+            key: "config",
+            value: e.to_string(),
+            expected: "a config that serialises to JSON",
+        })?;
         Ok(Self {
             objects,
             resolved: Resolved {
@@ -136,15 +144,14 @@ impl DatasetPlan {
                 intrinsics: config.intrinsics()?,
             },
             config: config.clone(),
+            hash: format!("{:016x}", name_hash(&text)),
         })
     }
 
     /// A hash of the config and the object list (FNV-1a of their JSON, hex): every shard
     /// records it, and a shard made with another is refused.
-    pub fn hash(&self) -> String {
-        let objects: Vec<&ManifestObject> = self.objects.iter().map(|(o, _)| o).collect();
-        let text = serde_json::to_string(&(&self.config, objects)).unwrap_or_default();
-        format!("{:016x}", name_hash(&text))
+    pub fn hash(&self) -> &str {
+        &self.hash
     }
 
     /// The record of shard `index` when it is finished in `out` and made by this plan.
@@ -160,7 +167,7 @@ impl DatasetPlan {
             return Err(Error::ForeignShard {
                 index,
                 found: record.plan_hash,
-                expected: self.hash(),
+                expected: self.hash.clone(),
                 path: out.join(shard::shard_file(index)),
             });
         }
@@ -291,7 +298,7 @@ fn make_shard(
         index,
         file: shard::shard_file(index),
         objects: objects.iter().map(|(o, _)| o.id).collect(),
-        plan_hash: plan.hash(),
+        plan_hash: plan.hash.clone(),
         ..ShardRecord::default()
     };
     let mut points = Vec::new();

@@ -7,7 +7,7 @@ use mvgrasp_geometry::{
     Camera, HemisphereLayout, Intrinsics, IntrinsicsPreset, Pose3, RestingPoses, TriangleMesh,
 };
 use mvgrasp_grasp::physics::{PhysicsObject, PhysicsOutcome};
-use mvgrasp_grasp::{GraspObject, PaperGrasp, label_grasps};
+use mvgrasp_grasp::{GraspLabel, GraspObject, Gripper, PaperGrasp, label_grasps};
 use mvgrasp_render::Renderer;
 use serde::Serialize;
 
@@ -178,8 +178,8 @@ pub fn render_scene(
     })
 }
 
-/// Checks `grasp` on `object` at `table_from_object`: the grasp dataset's label (robust
-/// Ferrari-Canny and collision) and, when `params.physics`, a rapier trial.
+/// Checks `grasp` made for `gripper` on `object` at `table_from_object`: the grasp dataset's
+/// label (robust Ferrari-Canny and collision) and, when `params.physics`, a rapier trial.
 ///
 /// # Errors
 /// An object the checks cannot use, or bad label settings.
@@ -187,9 +187,9 @@ pub fn check_grasp(
     object: &GraspObject,
     table_from_object: &Pose3,
     grasp: &ScoredGrasp,
+    gripper: &Gripper,
     params: &PlanParams,
-) -> Result<(AnalyticCheck, Option<PhysicsOutcome>)> {
-    let gripper = params.labels.gripper()?;
+) -> Result<GraspLabel> {
     let body = if params.physics {
         Some(PhysicsObject::from_grasp_object(
             object,
@@ -198,20 +198,14 @@ pub fn check_grasp(
     } else {
         None
     };
-    let label = label_grasps(
+    Ok(label_grasps(
         object,
         table_from_object,
         &[grasp.grasp],
-        &gripper,
+        gripper,
         &params.labels.label_params(body.as_ref()),
         params.seed,
-    )?[0];
-    let analytic = AnalyticCheck {
-        robust_epsilon: label.quality.robust_epsilon,
-        collision_free: label.collision_free,
-        robust: label.robust,
-    };
-    Ok((analytic, label.physics))
+    )?[0])
 }
 
 /// The main job in its three stages: [`render_scene`] (the object at rest and the views' depth),
@@ -226,6 +220,7 @@ pub fn plan_grasp(
     params: &PlanParams,
 ) -> Result<PlanReport> {
     let object = GraspObject::new(mesh.clone())?;
+    let gripper = params.labels.gripper()?;
     let started = Instant::now();
     let scene = render_scene(renderer, &object, params)?;
     let render_s = started.elapsed().as_secs_f64();
@@ -233,19 +228,15 @@ pub fn plan_grasp(
     let started = Instant::now();
     let mut plan = policy.plan(&scene.views, params.seed)?;
     if params.hand_check {
-        plan.reject_colliding(&scene.views, &params.labels.gripper()?, TOP_KEPT);
+        plan.reject_colliding(&scene.views, &gripper, TOP_KEPT);
     }
     let plan_s = started.elapsed().as_secs_f64();
 
     let started = Instant::now();
     let best = plan.best().copied();
-    let (analytic, physics) = match &best {
-        Some(best) => {
-            let (analytic, physics) = check_grasp(&object, &scene.table_from_object, best, params)?;
-            (Some(analytic), physics)
-        }
-        None => (None, None),
-    };
+    let label = best
+        .map(|best| check_grasp(&object, &scene.table_from_object, &best, &gripper, params))
+        .transpose()?;
     let check_s = started.elapsed().as_secs_f64();
     let views = scene
         .views
@@ -268,8 +259,12 @@ pub fn plan_grasp(
         top: plan.candidates.iter().take(TOP_KEPT).copied().collect(),
         rejections: plan.rejections,
         candidates: plan.candidates,
-        analytic,
-        physics,
+        analytic: label.map(|l| AnalyticCheck {
+            robust_epsilon: l.quality.robust_epsilon,
+            collision_free: l.collision_free,
+            robust: l.robust,
+        }),
+        physics: label.and_then(|l| l.physics),
         timings: PlanTimings {
             render_s,
             plan_s,

@@ -304,11 +304,12 @@ def _train(
             partial.replace(checkpoint)
         if world > 1:
             dist.barrier()
+    dataset = dataset_record(config.data.dataset_dir)
     recorded_config = json.loads(json.dumps(asdict(config), default=str))
-    recorded_config["data"]["dataset_dir"] = dataset_record(config.data.dataset_dir)["path"]
+    recorded_config["data"]["dataset_dir"] = dataset["path"]
     report: dict[str, Any] = {
         "config": recorded_config,
-        "dataset": dataset_record(config.data.dataset_dir),
+        "dataset": dataset,
         "code_commit": code_commit(),
         "torch": torch.__version__,
         "train_count": len(train_set),
