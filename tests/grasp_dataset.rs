@@ -98,6 +98,7 @@ fn crops_are_centred_on_the_grasp_with_its_axis_along_the_rows_and_labels_recomp
     let angle = f32s(&shard, "angle_rad");
     let depth = f32s(&shard, "grasp_depth_m");
     let epsilon = f32s(&shard, "robust_epsilon");
+    let width = f32s(&shard, "width_m");
     let seeds = u64s(&shard, "quality_seed");
     let labels = shard.tensor("robust_label").unwrap().data().to_vec();
     let free = shard.tensor("collision_free").unwrap().data().to_vec();
@@ -165,6 +166,7 @@ fn crops_are_centred_on_the_grasp_with_its_axis_along_the_rows_and_labels_recomp
             &object,
             &gripper,
             &grasp,
+            width[i],
             Some(&table),
             &config.sampling.collision,
         );

@@ -138,6 +138,7 @@ pub(crate) fn object_datapoints(
                     &object,
                     &resolved.gripper,
                     &object_from_gripper,
+                    grasp.width_m,
                     Some(&table_from_object),
                     &config.sampling.collision,
                 );

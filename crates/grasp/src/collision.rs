@@ -101,17 +101,23 @@ impl HandShapes {
     }
 }
 
-/// Checks the gripper at `object_from_gripper`, fully open as it comes in (as physics does),
-/// swept along its approach, against the object; and, when the object rests on a table
-/// (`table_from_object`, the table the plane z = 0), against the table.
+/// Checks the gripper at `object_from_gripper`, open for a grasp `width_m` wide as it comes in
+/// ([`Gripper::opening_for`], as physics does), swept along its approach, against the object;
+/// and, when the object rests on a table (`table_from_object`, the table the plane z = 0),
+/// against the table.
 pub fn check_collision(
     object: &GraspObject,
     gripper: &Gripper,
     object_from_gripper: &Pose3,
+    width_m: f32,
     table_from_object: Option<&Pose3>,
     params: &CollisionParams,
 ) -> Collision {
-    let hand = HandShapes::new(gripper, gripper.max_opening_m, gripper.approach_distance_m);
+    let hand = HandShapes::new(
+        gripper,
+        gripper.opening_for(width_m),
+        gripper.approach_distance_m,
+    );
     let table = table_from_object.is_some_and(|table_from_object| {
         hand.lowest_z(&(*table_from_object * *object_from_gripper)) < params.table_margin_m
     });
@@ -143,6 +149,7 @@ mod tests {
             &cube(),
             &Gripper::default(),
             &top_down(Vec3::new(0.0, 0.0, 0.0)),
+            0.05,
             None,
             &CollisionParams::default(),
         );
@@ -151,11 +158,13 @@ mod tests {
 
     #[test]
     fn fingers_too_close_for_the_cube_hit_it() {
-        // A Panda opened 5 cm around a 5 cm cube, off centre by 2 cm: a finger cuts the cube.
+        // A Panda opened 7 cm (the cube's 5 cm and the 2 cm margin), off centre by 2 cm: a finger
+        // cuts the cube.
         let c = check_collision(
             &cube(),
             &Gripper::default(),
             &top_down(Vec3::new(0.02, 0.0, 0.0)),
+            0.05,
             None,
             &CollisionParams::default(),
         );
@@ -171,14 +180,28 @@ mod tests {
         let gripper = Gripper::default();
         // Grasp line 1 cm above the table: the finger tips stay above it.
         let high = top_down(Vec3::new(0.0, 0.0, -0.015));
-        let c = check_collision(&object, &gripper, &high, Some(&table_from_object), &params);
+        let c = check_collision(
+            &object,
+            &gripper,
+            &high,
+            0.05,
+            Some(&table_from_object),
+            &params,
+        );
         assert!(c.is_free(), "{c:?}");
         // Grasp line 5 mm below the cube's bottom: the finger tips go through the table (and
         // the palm, 5 cm behind the tips, reaches the cube's top).
         let low = top_down(Vec3::new(0.0, 0.0, -0.03));
-        let c = check_collision(&object, &gripper, &low, Some(&table_from_object), &params);
+        let c = check_collision(
+            &object,
+            &gripper,
+            &low,
+            0.05,
+            Some(&table_from_object),
+            &params,
+        );
         assert!(c.table, "{c:?}");
-        let c = check_collision(&object, &gripper, &low, None, &params);
+        let c = check_collision(&object, &gripper, &low, 0.05, None, &params);
         assert!(!c.table, "no table given: {c:?}");
     }
 }

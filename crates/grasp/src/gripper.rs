@@ -13,8 +13,12 @@ use crate::error::{GraspError, Result};
 /// Collision geometry: two finger boxes (`finger_thickness_m` x `finger_width_m` x
 /// `finger_length_m`) spanning z in `[-finger_length_m, 0]` at x = +-(opening / 2 +
 /// thickness / 2), and a palm box of `palm_size_m` centred on the z axis behind them
-/// ([`Gripper::finger_center`], [`Gripper::palm_center`]). Collision checks and physics both
-/// bring the open hand in from `approach_distance_m` back along its approach.
+/// ([`Gripper::finger_center`], [`Gripper::palm_center`]). Each finger's inner face carries a
+/// round pad of `pad_radius_m` at its tip end, where it grips with `pad_friction`. The hand
+/// opens to the grasp's width plus `open_margin_m` ([`Gripper::opening_for`]), as a controller
+/// does, and every check uses that one geometry: the dataset's collision check, the planner's
+/// hand check and the physics trial bring the open hand in from `approach_distance_m` back along
+/// its approach.
 ///
 /// In a file (TOML or JSON) every field is optional and defaults to the Panda preset's, so
 /// `max_opening_m = 0.06` alone is a Panda with a narrower stroke.
@@ -41,7 +45,23 @@ pub struct Gripper {
     /// The pre-grasp pose stands this far back along -z from the grasp; the open hand comes in
     /// straight from there, metres.
     pub approach_distance_m: f32,
+    /// Radius of the round contact pad on each finger's inner face, centred across the finger
+    /// and `pad_radius_m` back from its tip, metres (Dex-Net's `finger_radius`, the soft-finger
+    /// contact radius). At most half the finger's width and length.
+    pub pad_radius_m: f32,
+    /// Coulomb friction between a pad (or any part of the hand) and an object.
+    pub pad_friction: f32,
+    /// The open hand stands this much wider than the grasp's width (at most `max_opening_m`),
+    /// metres.
+    pub open_margin_m: f32,
 }
+
+/// Pad friction unless a gripper file says otherwise (the usual value for rubber pads on household
+/// objects, and Dex-Net's friction coefficient).
+pub const DEFAULT_PAD_FRICTION: f32 = 0.5;
+
+/// How much wider than the grasp the hand opens unless a gripper file says otherwise, metres.
+pub const DEFAULT_OPEN_MARGIN_M: f32 = 0.02;
 
 /// The grippers mvgrasp knows by name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -116,6 +136,9 @@ impl Gripper {
             force_limit_n,
             palm_size_m,
             approach_distance_m: 0.08,
+            pad_radius_m: finger_width_m / 2.0,
+            pad_friction: DEFAULT_PAD_FRICTION,
+            open_margin_m: DEFAULT_OPEN_MARGIN_M,
         }
     }
 
@@ -221,6 +244,8 @@ impl Gripper {
             ("finger_width_m", self.finger_width_m),
             ("finger_thickness_m", self.finger_thickness_m),
             ("force_limit_n", self.force_limit_n),
+            ("pad_radius_m", self.pad_radius_m),
+            ("pad_friction", self.pad_friction),
         ] {
             if !(value.is_finite() && value > 0.0) {
                 return bad(name, value, "a finite number > 0");
@@ -235,7 +260,34 @@ impl Gripper {
                 "0 <= min_opening_m < max_opening_m",
             );
         }
+        if self.pad_radius_m > 0.5 * self.finger_width_m.min(self.finger_length_m) {
+            return bad(
+                "pad_radius_m",
+                self.pad_radius_m,
+                "at most half the finger's width and length",
+            );
+        }
+        if !(self.open_margin_m.is_finite() && self.open_margin_m >= 0.0) {
+            return bad("open_margin_m", self.open_margin_m, "a finite number >= 0");
+        }
         Ok(())
+    }
+
+    /// How far the hand opens for a grasp `width_m` wide: the width plus `open_margin_m`,
+    /// within the gripper's range, metres.
+    pub fn opening_for(&self, width_m: f32) -> f32 {
+        let open = width_m + self.open_margin_m;
+        if open.is_nan() {
+            return self.max_opening_m;
+        }
+        open.clamp(self.min_opening_m, self.max_opening_m)
+    }
+
+    /// Gripper-frame centre of the pad on the `side` of +x (`1.0`) or -x (`-1.0`) when the
+    /// fingers stand `opening_m` apart: on the finger's inner face, `pad_radius_m` back from
+    /// its tip.
+    pub fn pad_center(&self, opening_m: f32, side: f32) -> Vec3 {
+        Vec3::new(side * opening_m / 2.0, 0.0, -self.pad_radius_m)
     }
 
     /// Opening plus both fingers: the hand's reach along the closing axis when fully open.
@@ -269,6 +321,7 @@ impl DexNetParams {
             max_opening_m: self.max_width,
             force_limit_n: self.force_limit,
             finger_width_m: self.finger_radius.map_or(panda.finger_width_m, |r| 2.0 * r),
+            pad_radius_m: self.finger_radius.unwrap_or(panda.pad_radius_m),
             ..panda
         }
     }
@@ -312,6 +365,26 @@ mod tests {
                 .contains("force_limit_n")
         );
         assert!(Gripper::default().fits(0.05) && !Gripper::default().fits(0.09));
+        let big_pad = Gripper {
+            pad_radius_m: 0.011,
+            ..Gripper::default()
+        };
+        let err = big_pad.validate().unwrap_err().to_string();
+        assert!(err.contains("pad_radius_m"), "{err}");
+        let negative_margin = Gripper {
+            open_margin_m: -0.01,
+            ..Gripper::default()
+        };
+        assert!(negative_margin.validate().is_err());
+    }
+
+    #[test]
+    fn the_hand_opens_to_the_grasp_width_plus_the_margin_within_its_stroke() {
+        let panda = Gripper::default();
+        assert!((panda.opening_for(0.03) - 0.05).abs() < 1e-6);
+        assert_eq!(panda.opening_for(0.07), 0.08);
+        assert_eq!(panda.opening_for(-0.05), 0.0);
+        assert_eq!(panda.opening_for(f32::NAN), 0.08);
     }
 }
 

@@ -166,16 +166,22 @@ impl Gripper {
         let palm_y = span(&open.fixed, y);
         let extent = |s: [f32; 2]| s[1] - s[0];
         let origin = mid + z * (tip_z - mid.dot(z));
+        let finger_length_m = tip_z - palm_z[1];
+        let finger_width_m = extent(span(&open.moving, y));
         let gripper = Gripper {
             name: model.name().to_string(),
             max_opening_m,
             min_opening_m,
-            finger_length_m: tip_z - palm_z[1],
-            finger_width_m: extent(span(&open.moving, y)),
+            finger_length_m,
+            finger_width_m,
             finger_thickness_m: extent(span(&open.pads[0], x)),
             force_limit_n: spec.force_limit_n.unwrap_or(235.0),
             palm_size_m: [extent(palm_x), extent(palm_y), extent(palm_z)],
             approach_distance_m: spec.approach_distance_m.unwrap_or(0.08),
+            // The pad fills the finger's width (or half its length, if shorter).
+            pad_radius_m: 0.5 * finger_width_m.min(finger_length_m),
+            pad_friction: crate::gripper::DEFAULT_PAD_FRICTION,
+            open_margin_m: crate::gripper::DEFAULT_OPEN_MARGIN_M,
         };
         gripper.validate().map_err(|e| fail(e.to_string()))?;
         let rotation = Rot3::from_mat3(&mvgrasp_geometry::Mat3::from_cols(x, y, z));

@@ -82,6 +82,7 @@ pub fn label_grasps(
                 object,
                 gripper,
                 object_from_gripper,
+                grasp.width_m,
                 Some(table_from_object),
                 params.collision,
             )

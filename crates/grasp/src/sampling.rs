@@ -402,8 +402,14 @@ fn try_axis(
     let mut colliding = 0;
     for i in 0..k {
         let pose = found.object_from_gripper(offset + TAU * i as f32 / k as f32);
-        let collision =
-            check_collision(object, gripper, &pose, table_from_object, &params.collision);
+        let collision = check_collision(
+            object,
+            gripper,
+            &pose,
+            found.contacts.width_m,
+            table_from_object,
+            &params.collision,
+        );
         if collision.is_free() {
             free.push(SampledGrasp {
                 grasp: Grasp {

@@ -6,5 +6,6 @@
 mod shared_data;
 
 mod gripper_urdf;
+mod mechanics;
 mod physics;
 mod quality;

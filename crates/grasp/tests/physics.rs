@@ -82,8 +82,8 @@ fn fingers_closing_above_the_box_top_hold_nothing() {
 
 #[test]
 fn a_grip_too_weak_to_carry_the_weight_slips_during_the_lift() {
-    // 0.125 kg weighs 1.23 N; two fingers squeezing 0.5 N each with friction 0.65 (mean of the
-    // pads' 0.8 and the box's 0.5) hold at most 0.65 N: the box stays on the table.
+    // 0.125 kg weighs 1.23 N; two fingers squeezing 0.5 N each with the pads' friction 0.5
+    // hold at most 0.5 N: the box stays on the table.
     let (object, pose) = on_table(&box_mesh(Vec3::splat(0.025)));
     let params = PhysicsParams {
         closing_force_n: Some(0.5),
@@ -98,10 +98,10 @@ fn a_grip_too_weak_to_carry_the_weight_slips_during_the_lift() {
 #[test]
 fn a_weak_grip_far_off_centre_lets_a_stick_pivot_out() {
     // A 20 x 3 x 3 cm stick (0.18 kg) gripped with 5 N a finger. At its centre friction carries
-    // the weight (2 x 0.65 x 5 N = 6.5 N > 1.8 N). 8 cm off centre gravity pulls with 0.14 N m
-    // about the closing axis, more than friction spread over the 2 x 2 cm pads can resist
-    // (about 2 x 0.65 x 5 N x 8 mm = 0.05 N m): the stick swings down about the closing axis,
-    // its far end back on the table.
+    // the weight (2 x 0.5 x 5 N = 5 N > 1.8 N). 8 cm off centre gravity pulls with 0.14 N m
+    // about the closing axis, more than the two 1 cm pads can resist (2 x (2/3) x 0.5 x 5 N x
+    // 1 cm = 0.033 N m): the stick swings down about the closing axis, its far end back on the
+    // table.
     let (object, pose) = on_table(&box_mesh(Vec3::new(0.1, 0.015, 0.015)));
     let params = PhysicsParams {
         closing_force_n: Some(5.0),

@@ -49,14 +49,19 @@ impl Rejections {
 }
 
 /// Checks `candidate` against every view: `None` when it survives, else why not. The hand is
-/// `gripper`'s boxes, open to its widest, swept back along -z by its approach distance.
+/// `gripper`'s boxes, open for the candidate's width ([`Gripper::opening_for`]), swept back
+/// along -z by its approach distance.
 pub fn check_hand(candidate: &ScoredGrasp, views: &[View], gripper: &Gripper) -> Option<Rejection> {
     if let Some(view) = views.get(candidate.view)
         && !contacts_observed(candidate, view)
     {
         return Some(Rejection::ContactOffSurface);
     }
-    let hand = HandShapes::new(gripper, gripper.max_opening_m, gripper.approach_distance_m);
+    let hand = HandShapes::new(
+        gripper,
+        gripper.opening_for(candidate.grasp.width_m),
+        gripper.approach_distance_m,
+    );
     let gripper_from_world = candidate.grasp.world_from_gripper.inverse();
     views
         .iter()

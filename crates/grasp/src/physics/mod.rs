@@ -9,25 +9,39 @@
 //! World = table frame: +z up, the table's top is the plane z = 0 (a fixed slab). The object is
 //! one dynamic body placed at `table_from_object`, colliding through its convex parts, with the
 //! mesh's own mass, centre of mass and inertia at [`PhysicsParams::object_density_kg_m3`]. The
-//! gripper is a kinematic palm box (the gripper's `palm_size_m`, behind the fingers) driven by position, and two dynamic finger boxes on prismatic
-//! joints along the closing axis. Each joint has a velocity motor (target: the closing speed)
-//! whose force is capped at the gripper's `force_limit_n`: a finger moves at the closing speed
-//! until the object stops it, then squeezes with the force limit. The two fingers are driven
-//! independently, as a coupled gripper behaves while the object slides freely: the first finger
-//! to touch pushes the object until the other one arrives. Fingers feel no gravity (the palm
-//! carries them) and do not collide with each other or with the palm. The hand always opens to
-//! the gripper's widest, whatever the grasp's `width_m`.
+//! gripper is a kinematic palm box (the gripper's `palm_size_m`, behind the fingers) driven by
+//! position, and two dynamic fingers on prismatic joints along the closing axis. Each joint has a
+//! velocity motor (target: the closing speed) whose force is capped at the gripper's
+//! `force_limit_n`: a finger moves at the closing speed until the object stops it, then squeezes
+//! with the force limit. The two fingers are driven independently, as a coupled gripper behaves
+//! while the object slides freely: the first finger to touch pushes the object until the other
+//! one arrives. Fingers feel no gravity (the palm carries them) and do not collide with each
+//! other or with the palm. The hand opens to the grasp's width plus the gripper's
+//! `open_margin_m` ([`crate::Gripper::opening_for`]), as the collision checks do.
 //!
-//! Friction is Coulomb's, one cone per contact point (not rapier's default single cone and twist
-//! per manifold), so the torque a pad resists comes from how its contact points spread. Contact
-//! recycling is off: a held object moves with the fingers, and recycled contacts would never be
-//! updated while the fingers sink into it.
+//! # Pads and friction
 //!
+//! Each finger grips through a round pad of the gripper's `pad_radius_m` at its tip end: a ring
+//! of small balls standing 3 mm proud of the finger's box, so an object pressed against the
+//! finger touches the pad. Friction is Coulomb's, one cone per contact point, at the gripper's
+//! `pad_friction` between the hand and the object and [`PhysicsParams::table_friction`] between
+//! the object and the table. A round pad pressed with F resists a twist about its normal with
+//! up to (2/3) mu F r: on a flat face the ring's contacts give exactly that (each has the lever
+//! arm (2/3) r), and where fewer of them touch (a curved surface) a brake about the closing
+//! axis makes up the rest, so the pad behaves as a patch, not a point. Contact recycling and
+//! clustering are off: a held object moves with the fingers, and recycled contacts would never
+//! be updated while the fingers sink into it; clustering would merge the pad's contacts.
+//!
+//! `tests/mechanics.rs` checks the trial against answers from mechanics at 0.9 and 1.1 times
+//! each threshold: a squeezed box sliding out (m g = 2 mu F), a bar turning in the grip (its
+//! weight's torque = the pads' 2 (2/3) mu F r), a cylinder squeezed out on a chord (the contact
+//! normal past atan(mu)), and an approach meeting the object or clearing it by 1 mm.
+
 //! # The phases
 //!
 //! 1. Settle: the object alone on the table for [`PhysicsParams::settle_time_s`]. If it moves
 //!    more than the settle tolerances the pose is not stable: [`FailureStage::Settle`].
-//! 2. Approach: the open gripper (fingers at the widest opening) moves along its approach from
+//! 2. Approach: the open gripper (fingers open for the grasp) moves along its approach from
 //!    the gripper's `approach_distance_m` back to the grasp pose. It is checked by an exact
 //!    swept-volume test (conservative advancement on exact distances from both fingers and the
 //!    palm to the table and the settled object), not stepped: coming within 0.1 mm of anything
@@ -65,7 +79,8 @@ mod robust;
 mod scene;
 mod trial;
 
-pub use object::PhysicsObject;
+pub use object::{PhysicsObject, ShapeError};
 pub use params::{PhysicsNoise, PhysicsParams};
 pub use robust::{StageCounts, SuccessEstimate, success_probability};
+pub use scene::{PAD_BALL_RADIUS_M, PAD_BALLS, pad_ring_radius};
 pub use trial::{FailureStage, PhysicsOutcome, simulate_grasp};

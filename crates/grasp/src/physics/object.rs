@@ -1,10 +1,14 @@
 //! [`PhysicsObject`]: an object's collision shape and unit-density mass, built once and shared by
 //! every trial on it.
 
-use mvgrasp_geometry::{DecompositionParams, MassFacts, Pose3, TriangleMesh, Vec3};
+use mvgrasp_geometry::{DecompositionParams, MassFacts, Pose3, RayCaster, TriangleMesh, Vec3};
 use parry3d::mass_properties::MassProperties;
 use parry3d::math::Mat3;
-use parry3d::shape::SharedShape;
+use parry3d::query::PointQuery;
+use parry3d::shape::{Shape, SharedShape};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
 
 use crate::error::{GraspError, Result};
 use crate::object::{GraspObject, OBJECT_EXTENT_RANGE_M};
@@ -156,6 +160,115 @@ impl PhysicsObject {
     }
 }
 
+/// How far a collision shape's surface strays from the mesh it stands for: distances from
+/// points spread evenly over the shape's surface to the mesh's surface, metres.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ShapeError {
+    /// Points measured.
+    pub samples: usize,
+    /// Median distance.
+    pub median_m: f32,
+    /// 95th percentile.
+    pub p95_m: f32,
+    /// Largest.
+    pub max_m: f32,
+}
+
+impl PhysicsObject {
+    /// The one-sided distance from this object's collision surface to `mesh`'s surface (see
+    /// [`ShapeError`]), from `samples` points drawn evenly over the surface of the union of
+    /// its parts (a part's face inside another part is not surface) with `seed`.
+    ///
+    /// A convex hull's error is how far it bridges the mesh's concavities; a decomposition's
+    /// is that of its parts' bulges and gaps.
+    ///
+    /// # Errors
+    /// [`GraspError::Object`] when `mesh` cannot be queried (no triangle).
+    pub fn shape_error(
+        &self,
+        mesh: &TriangleMesh,
+        samples: usize,
+        seed: u64,
+    ) -> Result<ShapeError> {
+        let caster = RayCaster::new(mesh).map_err(|e| GraspError::Object {
+            detail: e.to_string(),
+            path: mesh.origin().to_path_buf(),
+        })?;
+        let target = caster.trimesh();
+        let parts: Vec<(Pose3, &dyn Shape)> = match self.shape.as_compound() {
+            Some(compound) => compound
+                .shapes()
+                .iter()
+                .map(|(pose, shape)| (*pose, &**shape as &dyn Shape))
+                .collect(),
+            None => vec![(Pose3::IDENTITY, &*self.shape as &dyn Shape)],
+        };
+        // Every face of every part, with its area: the sampling distribution.
+        let mut faces: Vec<(usize, [Vec3; 3], f32)> = Vec::new();
+        for (index, (pose, shape)) in parts.iter().enumerate() {
+            let Some(hull) = shape.as_convex_polyhedron() else {
+                continue;
+            };
+            let (vertices, triangles) = hull.to_trimesh();
+            for t in triangles {
+                let corners = t.map(|i| pose.transform_point(vertices[i as usize]));
+                let area = 0.5
+                    * (corners[1] - corners[0])
+                        .cross(corners[2] - corners[0])
+                        .length();
+                if area > 0.0 {
+                    faces.push((index, corners, area));
+                }
+            }
+        }
+        let total: f32 = faces.iter().map(|f| f.2).sum();
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut distances = Vec::with_capacity(samples);
+        let mut cumulative = Vec::with_capacity(faces.len());
+        let mut running = 0.0f32;
+        for face in &faces {
+            running += face.2;
+            cumulative.push(running);
+        }
+        for _ in 0..samples {
+            if faces.is_empty() {
+                break;
+            }
+            let pick = rng.random_range(0.0..total);
+            let f = cumulative
+                .partition_point(|&c| c < pick)
+                .min(faces.len() - 1);
+            let (part, [a, b, c], _) = faces[f];
+            let (mut u, mut v): (f32, f32) = (rng.random(), rng.random());
+            if u + v > 1.0 {
+                (u, v) = (1.0 - u, 1.0 - v);
+            }
+            let point = a + (b - a) * u + (c - a) * v;
+            // A point a hair outward of its face, inside another part, is not on the surface.
+            let outward = (b - a).cross(c - a).normalize_or_zero() * 1.0e-5;
+            let buried = parts.iter().enumerate().any(|(other, (pose, shape))| {
+                other != part && shape.contains_point(pose, point + outward)
+            });
+            if !buried {
+                distances.push(target.distance_to_local_point(point, false));
+            }
+        }
+        distances.sort_by(f32::total_cmp);
+        let at = |q: f32| {
+            distances
+                .get(((distances.len() as f32 - 1.0) * q).round() as usize)
+                .copied()
+                .unwrap_or(0.0)
+        };
+        Ok(ShapeError {
+            samples: distances.len(),
+            median_m: at(0.5),
+            p95_m: at(0.95),
+            max_m: distances.last().copied().unwrap_or(0.0),
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -173,6 +286,31 @@ mod tests {
         assert_eq!(object.num_parts(), 1);
         let props = object.mass_properties(1000.0);
         assert!((props.mass() - 0.125).abs() < 1e-4, "{}", props.mass());
+    }
+
+    #[test]
+    fn a_box_is_its_own_hull_and_a_hull_bridges_an_l_shapes_corner() {
+        let cube = box_mesh(Vec3::splat(0.025));
+        let object = PhysicsObject::new(&cube, &Default::default()).unwrap();
+        let error = object.shape_error(&cube, 2000, 1).unwrap();
+        assert!(error.max_m < 1e-5, "{error:?}");
+        assert!(error.samples == 2000, "{error:?}");
+        // An L of two 10 x 2 cm bars simulated as one hull: the middle of the hull's diagonal
+        // face is 4 cm from both bars.
+        let a = box_mesh(Vec3::new(0.05, 0.01, 0.01));
+        let b = box_mesh(Vec3::new(0.01, 0.05, 0.01))
+            .transformed(&Pose3::from_translation(Vec3::new(0.04, 0.04, 0.0)));
+        let l = TriangleMesh::concatenate(&[a, b], std::path::Path::new("l")).unwrap();
+        let hull = PhysicsObject {
+            shape: SharedShape::convex_hull(l.vertices()).unwrap(),
+            parts: 1,
+            unit_mass: object.unit_mass,
+        };
+        let error = hull.shape_error(&l, 4000, 1).unwrap();
+        assert!(
+            error.max_m > 0.035 && error.max_m < 0.0401 && error.p95_m > 0.02,
+            "{error:?}"
+        );
     }
 
     #[test]

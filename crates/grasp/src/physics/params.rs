@@ -27,9 +27,7 @@ use crate::object::DEFAULT_DENSITY_KG_M3;
 /// | `closing_speed_m_s` | 0.15 m/s | each finger's speed while closing |
 /// | `closing_force_n` | `None` | each finger's force limit; `None` is the gripper's `force_limit_n` |
 /// | `close_hold_s` | 0.05 s | squeezing after the fingers stop |
-/// | `finger_friction` | 0.8 | |
-/// | `object_friction` | 0.5 | a pair's friction is the mean of its two colliders' |
-/// | `table_friction` | 0.5 | |
+/// | `table_friction` | 0.5 | object against table (the hand grips with the gripper's `pad_friction`) |
 /// | `object_density_kg_m3` | 1000 | [`DEFAULT_DENSITY_KG_M3`] |
 /// | `lift_height_m` | 0.15 m | straight up, minimum-jerk profile |
 /// | `lift_duration_s` | 0.4 s | peak acceleration 5.4 m/s^2 |
@@ -75,11 +73,8 @@ pub struct PhysicsParams {
     pub closing_force_n: Option<f32>,
     /// Time the fingers keep squeezing after they stop, seconds.
     pub close_hold_s: f32,
-    /// Friction coefficient of the finger pads.
-    pub finger_friction: f32,
-    /// Friction coefficient of the object.
-    pub object_friction: f32,
-    /// Friction coefficient of the table.
+    /// Coulomb friction between the object and the table (between the object and the hand it
+    /// is the gripper's `pad_friction`).
     pub table_friction: f32,
     /// Object density, kilograms per cubic metre.
     pub object_density_kg_m3: f32,
@@ -128,8 +123,6 @@ impl Default for PhysicsParams {
             closing_speed_m_s: 0.15,
             closing_force_n: None,
             close_hold_s: 0.05,
-            finger_friction: 0.8,
-            object_friction: 0.5,
             table_friction: 0.5,
             object_density_kg_m3: DEFAULT_DENSITY_KG_M3,
             lift_height_m: 0.15,
@@ -186,8 +179,6 @@ impl PhysicsParams {
         for (name, value) in [
             ("settle_time_s", self.settle_time_s),
             ("close_hold_s", self.close_hold_s),
-            ("finger_friction", self.finger_friction),
-            ("object_friction", self.object_friction),
             ("table_friction", self.table_friction),
             ("lift_hold_s", self.lift_hold_s),
             ("shake_amplitude_m", self.shake_amplitude_m),

@@ -4,9 +4,11 @@
 
 use mvgrasp_geometry::{Pose3, Vec3};
 use parry3d::query;
+use parry3d::shape::SharedShape;
 use parry3d::shape::{Cuboid, Shape};
 use rapier3d::prelude::{
-    ColliderBuilder, ColliderHandle, FrictionModel, Group, InteractionGroups, InteractionTestMode,
+    CoefficientCombineRule, ColliderBuilder, ColliderHandle, FrictionModel, GenericJointBuilder,
+    Group, ImpulseJointHandle, InteractionGroups, InteractionTestMode, JointAxesMask, JointAxis,
     PhysicsWorld, PrismaticJointBuilder, RigidBodyBuilder, RigidBodyHandle, SpringCoefficients,
 };
 
@@ -29,6 +31,22 @@ pub(crate) struct Scene {
     pub table: ColliderHandle,
     pub object_body: RigidBodyHandle,
     pub object: ColliderHandle,
+    /// The pads' twist friction, once the hand is in.
+    pads: Vec<PadTwist>,
+}
+
+/// A pad's torsional friction beyond what its contacts give (see [`Scene::step`]).
+struct PadTwist {
+    finger: RigidBodyHandle,
+    pad: ColliderHandle,
+    /// Its balls' centres in the finger's body frame, in the pad compound's order.
+    balls: Vec<Vec3>,
+    /// A joint from the finger to the object that locks nothing and only brakes their relative
+    /// turn about the closing axis, up to the force the step allows.
+    joint: ImpulseJointHandle,
+    /// (2/3) mu r: the pad's torsional friction per newton pressing it, metres.
+    twist_per_newton_m: f32,
+    friction: f32,
 }
 
 /// The gripper's bodies, colliders and joints, and its shape in its own frame.
@@ -36,19 +54,37 @@ pub(crate) struct Hand {
     pub palm: RigidBodyHandle,
     /// The +x finger, then the -x finger.
     pub fingers: [RigidBodyHandle; 2],
-    pub finger_colliders: [ColliderHandle; 2],
+    /// Each finger's colliders: its (recessed) box and its pad.
+    pub finger_colliders: [[ColliderHandle; 2]; 2],
     pub shape: HandShape,
 }
 
+/// Radius of the balls whose contacts make up a simulated pad, metres (see
+/// [`pad_ring_radius`]).
+pub const PAD_BALL_RADIUS_M: f32 = 2.0e-3;
+
+/// The simulated pad of `gripper` touches through [`PAD_BALLS`] balls of
+/// [`PAD_BALL_RADIUS_M`] on a ring of this radius about the pad's centre, their tops flush with
+/// the finger's inner face: (2/3) `pad_radius_m`, the mean lever arm of a round pad pressed
+/// evenly, metres.
+pub fn pad_ring_radius(gripper: &Gripper) -> f32 {
+    2.0 / 3.0 * gripper.pad_radius_m
+}
+/// Balls per simulated pad.
+pub const PAD_BALLS: usize = 4;
+/// In the simulated hand a finger's box stands this far back from the pad's face, so that the
+/// pad, not the box, touches an object pressed flat against the finger, metres.
+const PAD_PROUD_M: f32 = 3.0e-3;
+
 /// The gripper's boxes in the gripper frame (origin midway between the finger tips, +z approach,
-/// +x closing axis), fingers open to the widest.
+/// +x closing axis), fingers open for the grasp, and its pads.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct HandShape {
     pub finger: Cuboid,
     pub palm: Cuboid,
     /// Gripper-frame centre of the palm box.
     pub palm_center: Vec3,
-    /// Gripper-frame |x| of a finger's centre when open to the widest.
+    /// Gripper-frame |x| of a finger's centre when open for the grasp.
     pub finger_open_x: f32,
     /// Gripper-frame |x| of a finger's centre when shut to the narrowest.
     pub finger_shut_x: f32,
@@ -56,11 +92,16 @@ pub(crate) struct HandShape {
     pub finger_z: f32,
     /// Finger thickness along x.
     pub thickness: f32,
+    /// Gripper-frame z of the pads' centres.
+    pub pad_z: f32,
+    /// Pad radius.
+    pub pad_radius: f32,
 }
 
 impl HandShape {
-    pub fn new(gripper: &Gripper) -> Self {
-        let open = gripper.finger_center(gripper.max_opening_m, 1.0);
+    /// The hand open `opening_m` (see [`Gripper::opening_for`]).
+    pub fn new(gripper: &Gripper, opening_m: f32) -> Self {
+        let open = gripper.finger_center(opening_m, 1.0);
         Self {
             finger: Cuboid::new(gripper.finger_half_extents()),
             palm: Cuboid::new(gripper.palm_half_extents()),
@@ -69,10 +110,57 @@ impl HandShape {
             finger_shut_x: gripper.finger_center(gripper.min_opening_m, 1.0).x,
             finger_z: open.z,
             thickness: gripper.finger_thickness_m,
+            pad_z: gripper.pad_center(opening_m, 1.0).z,
+            pad_radius: gripper.pad_radius_m,
         }
     }
 
-    /// Gripper-frame poses of the +x and -x fingers open to the widest.
+    /// The +x finger's simulated box, in its body frame (the finger box's centre): the box
+    /// with its inner face set back by [`PAD_PROUD_M`], behind the pad.
+    fn recessed_finger(&self) -> (Cuboid, Vec3) {
+        let half = self.finger.half_extents;
+        let recess = PAD_PROUD_M.min(half.x);
+        (
+            Cuboid::new(Vec3::new(half.x - recess / 2.0, half.y, half.z)),
+            Vec3::new(recess / 2.0, 0.0, 0.0),
+        )
+    }
+
+    /// The +x finger's pad, in its body frame: [`PAD_BALLS`] small balls on a ring of radius
+    /// (2/3) `pad_radius` about the pad's centre, their tops flush with the finger's inner face.
+    ///
+    /// A round pad of radius r pressed evenly with F resists a twist about its normal with up
+    /// to (2/3) mu F r: its contact points' mean lever arm is (2/3) r. On the ring every
+    /// contact has that arm, so the pad's torsional friction is exact however the solver
+    /// shares F among them (a disk of contacts was tried: rapier loads its outer contacts more,
+    /// so it resisted up to 20 % more than the pad). On a curved surface the ring still
+    /// touches at two or three contacts apart, as a pad's patch does, not at a point.
+    fn pad(&self) -> SharedShape {
+        let balls = self
+            .pad_ball_centers()
+            .map(|center| {
+                (
+                    Pose3::from_translation(center),
+                    SharedShape::ball(PAD_BALL_RADIUS_M),
+                )
+            })
+            .collect();
+        SharedShape::compound(balls)
+    }
+
+    /// The centres of the +x finger's pad balls in its body frame, in the pad's order.
+    fn pad_ball_centers(&self) -> impl Iterator<Item = Vec3> {
+        let face_x = -self.finger.half_extents.x + PAD_BALL_RADIUS_M;
+        let pad_z = self.pad_z - self.finger_z;
+        let ring = 2.0 / 3.0 * self.pad_radius; // pad_ring_radius
+        (0..PAD_BALLS).map(move |i| {
+            let angle = std::f32::consts::TAU * i as f32 / PAD_BALLS as f32;
+            let (sin, cos) = angle.sin_cos();
+            Vec3::new(face_x, ring * cos, pad_z + ring * sin)
+        })
+    }
+
+    /// Gripper-frame poses of the +x and -x fingers open for the grasp.
     pub fn open_finger_poses(&self) -> [Pose3; 2] {
         [1.0, -1.0]
             .map(|s| Pose3::from_translation(Vec3::new(s * self.finger_open_x, 0.0, self.finger_z)))
@@ -99,6 +187,9 @@ impl Scene {
         // while the fingers sink into it: they would squeeze through a can in a fraction of a
         // second.
         ip.contact_recycling = false;
+        // One manifold per pad ball, as the twist brake reads them: clustering would merge the
+        // balls' manifolds (one normal) into a few points.
+        ip.contact_clustering = false;
 
         let table_body = world.insert_body(RigidBodyBuilder::fixed());
         let table = world.insert_collider(
@@ -112,9 +203,12 @@ impl Scene {
             RigidBodyBuilder::dynamic()
                 .pose(*table_from_object)
                 .can_sleep(false),
+            // Friction 1 combined by product: a pair's coefficient is the other collider's, so
+            // the table's against the table and the pads' against the hand.
             ColliderBuilder::new(object.shape().clone())
                 .mass_properties(object.mass_properties(params.object_density_kg_m3))
-                .friction(params.object_friction)
+                .friction(1.0)
+                .friction_combine_rule(CoefficientCombineRule::Multiply)
                 .collision_groups(groups(OBJECT_GROUP, Group::ALL)),
         );
         Self {
@@ -122,45 +216,119 @@ impl Scene {
             table,
             object_body,
             object,
+            pads: Vec::new(),
         }
     }
 
-    /// Adds the gripper at `world_from_gripper`, fingers open to the widest and closing at
-    /// `params.closing_speed_m_s` with at most `force_n` each.
+    /// One rapier step, after setting each pad's twist brake for it.
+    ///
+    /// A round pad of radius r pressed with F resists a twist about its normal with up to
+    /// (2/3) mu F r, wherever on it the load lies; rapier's contacts resist with mu times the
+    /// sum of each contact's load and its distance from their load centre, which is the pad's
+    /// (2/3) mu F r when the load is on the ring of a flat face ([`HandShape::pad`]) and
+    /// nothing when one ball touches a curved surface. The brake, a joint motor about the
+    /// closing axis, makes up the difference, from the loads of the step before.
+    pub fn step(&mut self, dt: f32) {
+        for pad in &self.pads {
+            let limit = self.twist_shortfall(pad, dt);
+            if let Some(joint) = self.world.impulse_joints.get_mut(pad.joint, false) {
+                joint.data.set_motor_max_force(JointAxis::AngX, limit);
+            }
+        }
+        self.world.step();
+    }
+
+    /// (2/3) mu F r less what the pad's contacts resist, newton-metres (0 when untouched).
+    fn twist_shortfall(&self, pad: &PadTwist, dt: f32) -> f32 {
+        let Some(finger) = self.world.bodies.get(pad.finger) else {
+            return 0.0;
+        };
+        let Some(pair) = self.world.narrow_phase.contact_pair(pad.pad, self.object) else {
+            return 0.0;
+        };
+        let pad_is_first = pair.collider1 == pad.pad;
+        let loads: Vec<(Vec3, f32)> = pair
+            .manifolds()
+            .iter()
+            .filter_map(|m| {
+                let ball = if pad_is_first {
+                    m.subshape1
+                } else {
+                    m.subshape2
+                };
+                let center = pad.balls.get(ball as usize)?;
+                let impulse: f32 = m.points.iter().map(|p| p.data.impulse.abs()).sum();
+                Some((finger.position().transform_point(*center), impulse))
+            })
+            .collect();
+        let total: f32 = loads.iter().map(|(_, impulse)| impulse).sum();
+        if total <= 0.0 {
+            return 0.0;
+        }
+        let centre = loads.iter().map(|(p, i)| *p * *i).sum::<Vec3>() / total;
+        let spread: f32 = loads.iter().map(|(p, i)| p.distance(centre) * i).sum();
+        let force_n = total / dt;
+        (pad.twist_per_newton_m * force_n - pad.friction * spread / dt).max(0.0)
+    }
+
+    /// Adds the gripper at `world_from_gripper`, fingers open `shape`'s opening and closing at
+    /// `params.closing_speed_m_s` with at most `force_n` each; every part of the hand grips
+    /// with the gripper's `pad_friction`.
     pub fn add_hand(
         &mut self,
         world_from_gripper: &Pose3,
+        shape: HandShape,
         gripper: &Gripper,
         params: &PhysicsParams,
         force_n: f32,
     ) -> Hand {
-        let shape = HandShape::new(gripper);
         let gripper_groups = groups(GRIPPER_GROUP, TABLE_GROUP | OBJECT_GROUP);
+        let friction = gripper.pad_friction;
         let world = &mut self.world;
         let (palm, _) = world.insert(
             RigidBodyBuilder::kinematic_position_based().pose(*world_from_gripper),
-            ColliderBuilder::new(parry3d::shape::SharedShape::new(shape.palm))
+            ColliderBuilder::new(SharedShape::new(shape.palm))
                 .translation(shape.palm_center)
-                .friction(params.finger_friction)
+                .friction(friction)
                 .collision_groups(gripper_groups),
         );
-        let finger_volume = 8.0 * shape.finger.half_extents.element_product();
+        let (finger_box, box_offset) = shape.recessed_finger();
+        let finger_volume = 8.0 * finger_box.half_extents.element_product();
+        let pad = shape.pad();
         let mut fingers = [palm; 2];
-        let mut finger_colliders = [ColliderHandle::invalid(); 2];
+        let mut finger_colliders = [[ColliderHandle::invalid(); 2]; 2];
         for (i, (side, local)) in [1.0f32, -1.0]
             .into_iter()
             .zip(shape.open_finger_poses())
             .enumerate()
         {
+            // The -x finger is the +x one turned half a turn about the approach axis.
+            let mirror = if side > 0.0 {
+                Pose3::IDENTITY
+            } else {
+                Pose3::from_rotation(mvgrasp_geometry::Rot3::from_rotation_z(
+                    std::f32::consts::PI,
+                ))
+            };
             let (finger, collider) = world.insert(
                 RigidBodyBuilder::dynamic()
                     .pose(*world_from_gripper * local)
                     .gravity_scale(0.0)
                     .can_sleep(false),
-                ColliderBuilder::new(parry3d::shape::SharedShape::new(shape.finger))
+                ColliderBuilder::new(SharedShape::new(finger_box))
+                    .position(mirror * Pose3::from_translation(box_offset))
                     .density(params.finger_mass_kg / finger_volume)
-                    .friction(params.finger_friction)
+                    .friction(friction)
                     .collision_groups(gripper_groups),
+            );
+            let pad_collider = world.colliders.insert_with_parent(
+                ColliderBuilder::new(pad.clone())
+                    .position(mirror)
+                    .density(0.0)
+                    .friction(friction)
+                    .collision_groups(groups(GRIPPER_GROUP, OBJECT_GROUP)),
+                finger,
+                &mut world.bodies,
             );
             // The joint coordinate is the finger centre's gripper-frame x: the +x finger lives
             // in [shut, open] and closes towards -x, the -x finger mirrors it.
@@ -175,7 +343,33 @@ impl Scene {
                 .contacts_enabled(false);
             world.insert_impulse_joint(palm, finger, joint);
             fingers[i] = finger;
-            finger_colliders[i] = collider;
+            finger_colliders[i] = [collider, pad_collider];
+            // The twist brake: frames whose x is the closing axis on both bodies, as they
+            // stand now.
+            let world_from_finger = *world_from_gripper * local;
+            let object_from_finger = world
+                .bodies
+                .get(self.object_body)
+                .map_or(Pose3::IDENTITY, |b| {
+                    b.position().inverse() * world_from_finger
+                });
+            let brake = GenericJointBuilder::new(JointAxesMask::empty())
+                .local_frame1(Pose3::IDENTITY)
+                .local_frame2(object_from_finger)
+                .motor_velocity(JointAxis::AngX, 0.0, MOTOR_DAMPING)
+                .motor_max_force(JointAxis::AngX, 0.0);
+            let joint = world.insert_impulse_joint(finger, self.object_body, brake);
+            self.pads.push(PadTwist {
+                finger,
+                pad: pad_collider,
+                balls: shape
+                    .pad_ball_centers()
+                    .map(|c| mirror.transform_point(c))
+                    .collect(),
+                joint,
+                twist_per_newton_m: 2.0 / 3.0 * friction * shape.pad_radius,
+                friction,
+            });
         }
         Hand {
             palm,
@@ -199,6 +393,15 @@ impl Scene {
             .bodies
             .get(self.object_body)
             .map_or(Vec3::ZERO, |b| b.center_of_mass())
+    }
+
+    /// Exact distance between a finger (its box or its pad, whichever is nearer) and the
+    /// object, metres.
+    pub fn finger_distance(&self, finger: [ColliderHandle; 2]) -> f32 {
+        finger
+            .into_iter()
+            .map(|part| self.distance(part, self.object))
+            .fold(f32::INFINITY, f32::min)
     }
 
     /// Exact distance between two colliders, metres (0 when they overlap; infinite when either
@@ -299,7 +502,7 @@ mod tests {
         let params = PhysicsParams::default();
         let on_table = Pose3::from_translation(Vec3::new(0.0, 0.0, 0.025));
         let scene = Scene::new(&object, &on_table, &params);
-        let shape = HandShape::new(&Gripper::default());
+        let shape = HandShape::new(&Gripper::default(), 0.08);
         let down = Rot3::from_rotation_x(std::f32::consts::PI);
         // Open Panda fingers: inner faces 4 cm either side of the closing line.
         let hits = |x: f32, z_end: f32| {
@@ -320,7 +523,7 @@ mod tests {
             finger_length_m: 0.03,
             ..Gripper::default()
         };
-        let short = HandShape::new(&short);
+        let short = HandShape::new(&short, 0.08);
         let pre = Pose3::from_parts(Vec3::new(0.0, 0.0, 0.09), down);
         assert!(scene.sweep_hits(&short, &pre, Vec3::new(0.0, 0.0, -0.08)));
     }

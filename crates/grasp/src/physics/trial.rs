@@ -149,11 +149,11 @@ impl Trial<'_> {
         let Some(rest_com) = self.settle() else {
             return self.failure(FailureStage::Settle, 0.0);
         };
-        let shape = HandShape::new(gripper);
+        let shape = HandShape::new(gripper, gripper.opening_for(grasp.width_m));
         if self.approach_hits(&shape, grasp, gripper.approach_distance_m) {
             return self.failure(FailureStage::Approach, 0.0);
         }
-        let grip = match self.close(grasp, gripper, rest_com) {
+        let grip = match self.close(grasp, shape, gripper, rest_com) {
             Ok(grip) => grip,
             Err(opening_m) => return self.failure(FailureStage::Close, opening_m),
         };
@@ -200,6 +200,7 @@ impl Trial<'_> {
     fn close(
         &mut self,
         grasp: &Grasp,
+        shape: HandShape,
         gripper: &Gripper,
         rest_com: Vec3,
     ) -> std::result::Result<Grip, f32> {
@@ -207,7 +208,7 @@ impl Trial<'_> {
         let force_n = p.closing_force_n.unwrap_or(gripper.force_limit_n);
         let hand = self
             .scene
-            .add_hand(&grasp.world_from_gripper, gripper, p, force_n);
+            .add_hand(&grasp.world_from_gripper, shape, gripper, p, force_n);
         let travel_m = hand.shape.finger_open_x - hand.shape.finger_shut_x;
         let max_steps = self.steps_for(travel_m / p.closing_speed_m_s + 0.1);
         let slow = 0.1 * p.closing_speed_m_s;
@@ -228,7 +229,7 @@ impl Trial<'_> {
         let touching = hand
             .finger_colliders
             .iter()
-            .all(|&f| self.scene.distance(f, self.scene.object) <= p.contact_tolerance_m);
+            .all(|&f| self.scene.finger_distance(f) <= p.contact_tolerance_m);
         if !touching || opening_m <= gripper.min_opening_m + SHUT_TOLERANCE_M {
             return Err(opening_m);
         }
@@ -288,7 +289,7 @@ impl Trial<'_> {
     }
 
     fn step(&mut self) {
-        self.scene.world.step();
+        self.scene.step(self.params.timestep_s);
         self.steps += 1;
     }
 
@@ -355,7 +356,7 @@ impl Trial<'_> {
             .hand
             .finger_colliders
             .iter()
-            .all(|&f| scene.distance(f, scene.object) <= p.contact_tolerance_m);
+            .all(|&f| scene.finger_distance(f) <= p.contact_tolerance_m);
         let off_table = scene.distance(scene.object, scene.table) > p.contact_tolerance_m;
         Hold {
             held: fingers_touch
