@@ -2,7 +2,7 @@
 //! clear the table, their quality (nominal and robust Ferrari-Canny, Dex-Net 2.0's label) and
 //! what physics makes of them. The library form of the `grasps` command.
 
-use mvgrasp_geometry::{DecompositionParams, Pose3};
+use mvgrasp_geometry::Pose3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -12,8 +12,8 @@ use crate::gripper::Gripper;
 use crate::label::GraspLabel;
 use crate::object::GraspObject;
 use crate::physics::{
-    PhysicsNoise, PhysicsObject, PhysicsOutcome, PhysicsParams, SuccessEstimate, simulate_grasp,
-    success_probability,
+    PhysicsNoise, PhysicsObject, PhysicsOutcome, PhysicsParams, ShapeParams, SuccessEstimate,
+    simulate_grasp, success_probability,
 };
 use crate::quality::{RobustQuality, RobustQualityParams, grasp_seed, robust_qualities};
 use crate::sampling::{SamplingParams, SamplingReport, sample_antipodal};
@@ -32,8 +32,8 @@ pub struct AnalysisConfig {
     pub physics_trials: usize,
     /// Pose noise of the perturbed trials.
     pub physics_noise: PhysicsNoise,
-    /// Convex decomposition of the object for physics.
-    pub decomposition: DecompositionParams,
+    /// How physics shapes the object.
+    pub shape: ShapeParams,
 }
 
 /// One grasp with everything known about it.
@@ -105,8 +105,7 @@ pub fn analyse(
         .physics
         .as_ref()
         .map(|params| {
-            PhysicsObject::from_grasp_object(object, &config.decomposition)
-                .map(|body| (params, body))
+            PhysicsObject::from_grasp_object(object, &config.shape).map(|body| (params, body))
         })
         .transpose()?;
     let physics_seed = grasp_seed(seed, 2);

@@ -4,10 +4,10 @@
 //!
 //! The trials here are quasi-static (a slow lift, no shake): the thresholds are static ones.
 
-use mvgrasp_geometry::{DecompositionParams, Pose3, Rot3, TriangleMesh, Vec3};
+use mvgrasp_geometry::{Pose3, Rot3, TriangleMesh, Vec3};
 use mvgrasp_grasp::physics::{
-    FailureStage, PAD_BALL_RADIUS_M, PhysicsObject, PhysicsOutcome, PhysicsParams, pad_ring_radius,
-    simulate_grasp,
+    FailureStage, PAD_BALL_RADIUS_M, PhysicsObject, PhysicsOutcome, PhysicsParams, ShapeParams,
+    pad_ring_radius, simulate_grasp,
 };
 use mvgrasp_grasp::{Grasp, Gripper};
 use parry3d::shape::{Cuboid, Cylinder};
@@ -49,7 +49,7 @@ fn trial(
     grasp: &Grasp,
     params: &PhysicsParams,
 ) -> PhysicsOutcome {
-    let object = PhysicsObject::new(mesh, &DecompositionParams::default()).unwrap();
+    let object = PhysicsObject::new(mesh, &ShapeParams::default()).unwrap();
     simulate_grasp(
         &object,
         &table_from_object,

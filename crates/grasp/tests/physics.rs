@@ -3,12 +3,10 @@
 //! bad ones, an approach through the table, determinism, and (ignored, run in release) the cost
 //! of a trial.
 
-use mvgrasp_geometry::{
-    DecompositionParams, Pose3, Rot3, StablePoseParams, TriangleMesh, Vec3, stable_poses,
-};
+use mvgrasp_geometry::{Pose3, Rot3, StablePoseParams, TriangleMesh, Vec3, stable_poses};
 use mvgrasp_grasp::physics::{
-    FailureStage, PhysicsNoise, PhysicsObject, PhysicsOutcome, PhysicsParams, simulate_grasp,
-    success_probability,
+    FailureStage, PhysicsNoise, PhysicsObject, PhysicsOutcome, PhysicsParams, ShapeParams,
+    simulate_grasp, success_probability,
 };
 use mvgrasp_grasp::{Grasp, Gripper, GripperPreset};
 use parry3d::shape::Cuboid;
@@ -20,7 +18,7 @@ fn box_mesh(half: Vec3) -> TriangleMesh {
 
 /// The object and its most probable stable pose.
 fn on_table(mesh: &TriangleMesh) -> (PhysicsObject, Pose3) {
-    let object = PhysicsObject::new(mesh, &DecompositionParams::default()).unwrap();
+    let object = PhysicsObject::new(mesh, &ShapeParams::default()).unwrap();
     let pose = stable_poses(mesh, &StablePoseParams::default()).unwrap()[0].table_from_object;
     (object, pose)
 }
@@ -125,7 +123,7 @@ fn a_decomposed_l_shape_is_lifted_by_one_arm() {
     let b = box_mesh(Vec3::new(0.01, 0.05, 0.01))
         .transformed(&Pose3::from_translation(Vec3::new(0.04, 0.06, 0.0)));
     let l = TriangleMesh::concatenate(&[a, b], std::path::Path::new("l")).unwrap();
-    let object = PhysicsObject::new(&l, &DecompositionParams::default()).unwrap();
+    let object = PhysicsObject::new(&l, &ShapeParams::default()).unwrap();
     assert!(object.num_parts() >= 2, "{object:?}");
     let pose = Pose3::from_translation(Vec3::new(0.0, 0.0, 0.01));
     // Across the first bar, 4 cm from the corner.
@@ -171,7 +169,7 @@ fn fingers_that_would_go_through_the_table_fail_on_the_approach() {
 fn a_box_tipped_on_its_edge_topples_before_the_gripper_comes() {
     // Resting on one edge, tilted 30 degrees: not a stable pose, it falls onto a face.
     let mesh = box_mesh(Vec3::splat(0.025));
-    let object = PhysicsObject::new(&mesh, &DecompositionParams::default()).unwrap();
+    let object = PhysicsObject::new(&mesh, &ShapeParams::default()).unwrap();
     let tilt = Rot3::from_rotation_y(30f32.to_radians());
     let lowest = mesh
         .vertices()

@@ -77,10 +77,12 @@ mod object;
 mod params;
 mod robust;
 mod scene;
+pub mod shell;
 mod trial;
 
-pub use object::{PhysicsObject, ShapeError};
+pub use object::{PhysicsObject, shape_error};
 pub use params::{PhysicsNoise, PhysicsParams};
 pub use robust::{StageCounts, SuccessEstimate, success_probability};
 pub use scene::{PAD_BALL_RADIUS_M, PAD_BALLS, pad_ring_radius};
+pub use shell::{ShapeError, ShapeParams};
 pub use trial::{FailureStage, PhysicsOutcome, simulate_grasp};

@@ -1,29 +1,25 @@
 //! [`PhysicsObject`]: an object's collision shape and unit-density mass, built once and shared by
 //! every trial on it.
 
-use mvgrasp_geometry::{DecompositionParams, MassFacts, Pose3, RayCaster, TriangleMesh, Vec3};
+use mvgrasp_geometry::{MassFacts, Pose3, TriangleMesh, Vec3};
 use parry3d::mass_properties::MassProperties;
 use parry3d::math::Mat3;
-use parry3d::query::PointQuery;
-use parry3d::shape::{Shape, SharedShape};
-use rand::{RngExt, SeedableRng};
+use parry3d::shape::SharedShape;
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use serde::{Deserialize, Serialize};
+
+use crate::physics::shell::{self, ShapeError, ShapeParams, SignedMesh};
 
 use crate::error::{GraspError, Result};
 use crate::object::{GraspObject, OBJECT_EXTENT_RANGE_M};
 
-/// A mesh whose convex hull encloses at most this much more volume than the mesh itself is
-/// simulated as its hull.
-const CONVEX_VOLUME_RATIO: f32 = 1.02;
-
-/// An object ready for physics trials (frame: the mesh's own): convex parts for collisions and
-/// the mesh's own mass facts at a density of 1 kg/m^3 (scaled by each trial's density).
+/// An object ready for physics trials (frame: the mesh's own): its collision shape and the
+/// mesh's own mass facts at a density of 1 kg/m^3 (scaled by each trial's density).
 ///
-/// Collision uses a convex decomposition ([`TriangleMesh::convex_decomposition`]); a mesh that
-/// is already convex (its hull is within 2 % of its volume), or whose decomposition fails, is
-/// simulated as its convex hull. Mass, centre of mass and inertia come from the mesh itself, not
-/// from the parts, so they do not depend on how well the parts fit.
+/// The collision shape follows the mesh's surface within [`ShapeParams::tolerance_m`]: the
+/// mesh's convex hull when no point of the hull stands further outside the mesh, else a shell of
+/// convex slabs along the surface ([`crate::physics::shell`]). Mass, centre of mass and inertia
+/// come from the mesh itself, not from the shape.
 #[derive(Clone)]
 pub struct PhysicsObject {
     shape: SharedShape,
@@ -46,8 +42,9 @@ impl PhysicsObject {
     /// # Errors
     /// [`GraspError::Object`], naming the mesh's file, when the mesh is outside the sizes grasp
     /// analysis takes ([`OBJECT_EXTENT_RANGE_M`]), encloses no volume or has a flat hull;
-    /// [`GraspError::InvalidParameter`] for decomposition parameters out of range.
-    pub fn new(mesh: &TriangleMesh, decomposition: &DecompositionParams) -> Result<Self> {
+    /// [`GraspError::InvalidParameter`] for bad `params`.
+    pub fn new(mesh: &TriangleMesh, params: &ShapeParams) -> Result<Self> {
+        params.validate()?;
         let object_error = |detail: String| GraspError::Object {
             detail,
             path: mesh.origin().to_path_buf(),
@@ -59,56 +56,32 @@ impl PhysicsObject {
                 "its largest extent is {extent} m; physics takes objects {lo} m to {hi} m across"
             )));
         }
+        // A mesh that is not watertight has its hull's mass facts.
         let unit_mass = mesh
             .mass_facts(1.0)
             .map_err(|e| object_error(e.to_string()))?;
         let hull = mesh
             .convex_hull()
             .map_err(|e| object_error(e.to_string()))?;
-        // A mesh that is not watertight has its hull's mass facts, so it is simulated as its hull
-        // too. Known cost: an open scan of a mug loses its cavity. Decomposing such scans instead
-        // (VHACD on an open surface) made the YCB mustard and robosuite bottle topple while
-        // settling in poses that are stable as meshes, which cost more agreement than it won.
-        let convex = hull.signed_volume_m3() <= CONVEX_VOLUME_RATIO * unit_mass.volume_m3;
-        let parts = if convex {
-            vec![hull]
-        } else {
-            match mesh.convex_decomposition(decomposition) {
-                Ok(parts) => parts,
-                Err(mvgrasp_geometry::GeometryError::InvalidParameter {
-                    op,
-                    name,
-                    value,
-                    expected,
-                }) => {
-                    return Err(GraspError::InvalidParameter {
-                        op,
-                        name,
-                        value,
-                        expected,
-                    });
-                }
-                Err(_) => vec![hull],
-            }
-        };
-        let mut shapes: Vec<(Pose3, SharedShape)> = parts
-            .iter()
-            .filter_map(|part| SharedShape::convex_hull(part.vertices()))
-            .map(|shape| (Pose3::IDENTITY, shape))
-            .collect();
-        let count = shapes.len();
-        let shape = match shapes.pop() {
-            Some((_, only)) if count == 1 => only,
-            Some(last) => {
-                shapes.push(last);
-                SharedShape::compound(shapes)
-            }
-            None => {
-                return Err(object_error(
-                    "no convex part of its decomposition has volume".into(),
-                ));
-            }
-        };
+        let hull = SharedShape::convex_hull(hull.vertices())
+            .ok_or_else(|| object_error("its convex hull is flat".into()))?;
+        let signed = SignedMesh::new(mesh)?;
+        let mut rng = ChaCha8Rng::seed_from_u64(0x5EED);
+        if shell::bulge_within(&hull, &signed, params.tolerance_m, &mut rng) {
+            return Ok(Self {
+                shape: hull,
+                parts: 1,
+                unit_mass,
+            });
+        }
+        let parts = shell::shell_parts(mesh, &signed, params)?;
+        let count = parts.len();
+        let shape = SharedShape::compound(
+            parts
+                .into_iter()
+                .map(|part| (Pose3::IDENTITY, part))
+                .collect(),
+        );
         Ok(Self {
             shape,
             parts: count,
@@ -120,11 +93,8 @@ impl PhysicsObject {
     ///
     /// # Errors
     /// See [`PhysicsObject::new`].
-    pub fn from_grasp_object(
-        object: &GraspObject,
-        decomposition: &DecompositionParams,
-    ) -> Result<Self> {
-        Self::new(object.mesh(), decomposition)
+    pub fn from_grasp_object(object: &GraspObject, params: &ShapeParams) -> Result<Self> {
+        Self::new(object.mesh(), params)
     }
 
     /// The number of convex parts that collide (1 for a convex object).
@@ -135,6 +105,14 @@ impl PhysicsObject {
     /// The collision shape, object frame: one convex hull, or a compound of convex parts.
     pub fn shape(&self) -> &SharedShape {
         &self.shape
+    }
+
+    /// The convex parts with their poses, object frame.
+    pub(crate) fn parts(&self) -> Vec<(Pose3, SharedShape)> {
+        match self.shape.as_compound() {
+            Some(compound) => compound.shapes().to_vec(),
+            None => vec![(Pose3::IDENTITY, self.shape.clone())],
+        }
     }
 
     /// The centre of mass, object frame, metres.
@@ -160,113 +138,36 @@ impl PhysicsObject {
     }
 }
 
-/// How far a collision shape's surface strays from the mesh it stands for: distances from
-/// points spread evenly over the shape's surface to the mesh's surface, metres.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ShapeError {
-    /// Points measured.
-    pub samples: usize,
-    /// Median distance.
-    pub median_m: f32,
-    /// 95th percentile.
-    pub p95_m: f32,
-    /// Largest.
-    pub max_m: f32,
-}
-
 impl PhysicsObject {
-    /// The one-sided distance from this object's collision surface to `mesh`'s surface (see
-    /// [`ShapeError`]), from `samples` points drawn evenly over the surface of the union of
-    /// its parts (a part's face inside another part is not surface) with `seed`.
-    ///
-    /// A convex hull's error is how far it bridges the mesh's concavities; a decomposition's
-    /// is that of its parts' bulges and gaps.
+    /// How far this object's collision shape strays from `mesh` (the mesh it was made from),
+    /// from `samples` points spread over each surface with `seed` (see [`ShapeError`]).
     ///
     /// # Errors
-    /// [`GraspError::Object`] when `mesh` cannot be queried (no triangle).
+    /// [`GraspError::Object`] when `mesh` cannot be queried.
     pub fn shape_error(
         &self,
         mesh: &TriangleMesh,
         samples: usize,
         seed: u64,
     ) -> Result<ShapeError> {
-        let caster = RayCaster::new(mesh).map_err(|e| GraspError::Object {
-            detail: e.to_string(),
-            path: mesh.origin().to_path_buf(),
-        })?;
-        let target = caster.trimesh();
-        let parts: Vec<(Pose3, &dyn Shape)> = match self.shape.as_compound() {
-            Some(compound) => compound
-                .shapes()
-                .iter()
-                .map(|(pose, shape)| (*pose, &**shape as &dyn Shape))
-                .collect(),
-            None => vec![(Pose3::IDENTITY, &*self.shape as &dyn Shape)],
-        };
-        // Every face of every part, with its area: the sampling distribution.
-        let mut faces: Vec<(usize, [Vec3; 3], f32)> = Vec::new();
-        for (index, (pose, shape)) in parts.iter().enumerate() {
-            let Some(hull) = shape.as_convex_polyhedron() else {
-                continue;
-            };
-            let (vertices, triangles) = hull.to_trimesh();
-            for t in triangles {
-                let corners = t.map(|i| pose.transform_point(vertices[i as usize]));
-                let area = 0.5
-                    * (corners[1] - corners[0])
-                        .cross(corners[2] - corners[0])
-                        .length();
-                if area > 0.0 {
-                    faces.push((index, corners, area));
-                }
-            }
-        }
-        let total: f32 = faces.iter().map(|f| f.2).sum();
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let mut distances = Vec::with_capacity(samples);
-        let mut cumulative = Vec::with_capacity(faces.len());
-        let mut running = 0.0f32;
-        for face in &faces {
-            running += face.2;
-            cumulative.push(running);
-        }
-        for _ in 0..samples {
-            if faces.is_empty() {
-                break;
-            }
-            let pick = rng.random_range(0.0..total);
-            let f = cumulative
-                .partition_point(|&c| c < pick)
-                .min(faces.len() - 1);
-            let (part, [a, b, c], _) = faces[f];
-            let (mut u, mut v): (f32, f32) = (rng.random(), rng.random());
-            if u + v > 1.0 {
-                (u, v) = (1.0 - u, 1.0 - v);
-            }
-            let point = a + (b - a) * u + (c - a) * v;
-            // A point a hair outward of its face, inside another part, is not on the surface.
-            let outward = (b - a).cross(c - a).normalize_or_zero() * 1.0e-5;
-            let buried = parts.iter().enumerate().any(|(other, (pose, shape))| {
-                other != part && shape.contains_point(pose, point + outward)
-            });
-            if !buried {
-                distances.push(target.distance_to_local_point(point, false));
-            }
-        }
-        distances.sort_by(f32::total_cmp);
-        let at = |q: f32| {
-            distances
-                .get(((distances.len() as f32 - 1.0) * q).round() as usize)
-                .copied()
-                .unwrap_or(0.0)
-        };
-        Ok(ShapeError {
-            samples: distances.len(),
-            median_m: at(0.5),
-            p95_m: at(0.95),
-            max_m: distances.last().copied().unwrap_or(0.0),
-        })
+        shape_error(&self.shape, mesh, samples, seed)
     }
+}
+
+/// How far `shape` (one convex polyhedron or a compound of them, the mesh's frame) strays from
+/// `mesh`, from `samples` points spread over each surface with `seed` (see [`ShapeError`]): to
+/// compare other shapes of the same mesh.
+///
+/// # Errors
+/// [`GraspError::Object`] when `mesh` cannot be queried.
+pub fn shape_error(
+    shape: &SharedShape,
+    mesh: &TriangleMesh,
+    samples: usize,
+    seed: u64,
+) -> Result<ShapeError> {
+    let signed = SignedMesh::new(mesh)?;
+    Ok(shell::shape_error(shape, mesh, &signed, samples, seed))
 }
 
 #[cfg(test)]
@@ -288,19 +189,49 @@ mod tests {
         assert!((props.mass() - 0.125).abs() < 1e-4, "{}", props.mass());
     }
 
+    /// An L of two 10 x 2 cm arms, 2 cm thick: one closed mesh (the L outline extruded).
+    fn l_shape() -> TriangleMesh {
+        let outline = [
+            [-0.05, -0.01],
+            [0.05, -0.01],
+            [0.05, 0.09],
+            [0.03, 0.09],
+            [0.03, 0.01],
+            [-0.05, 0.01],
+        ];
+        let n = outline.len() as u32;
+        let mut vertices: Vec<Vec3> = outline
+            .iter()
+            .map(|[x, y]| Vec3::new(*x, *y, -0.01))
+            .collect();
+        vertices.extend(outline.iter().map(|[x, y]| Vec3::new(*x, *y, 0.01)));
+        // The outline's triangles, counter-clockwise from above.
+        let cap = [[0, 1, 4], [0, 4, 5], [1, 2, 3], [1, 3, 4]];
+        let mut triangles: Vec<[u32; 3]> = Vec::new();
+        for [a, b, c] in cap {
+            triangles.push([a + n, b + n, c + n]);
+            triangles.push([a, c, b]);
+        }
+        for a in 0..n {
+            let b = (a + 1) % n;
+            triangles.push([a, b, b + n]);
+            triangles.push([a, b + n, a + n]);
+        }
+        TriangleMesh::new(vertices, triangles).unwrap()
+    }
+
     #[test]
     fn a_box_is_its_own_hull_and_a_hull_bridges_an_l_shapes_corner() {
         let cube = box_mesh(Vec3::splat(0.025));
         let object = PhysicsObject::new(&cube, &Default::default()).unwrap();
         let error = object.shape_error(&cube, 2000, 1).unwrap();
-        assert!(error.max_m < 1e-5, "{error:?}");
-        assert!(error.samples == 2000, "{error:?}");
-        // An L of two 10 x 2 cm bars simulated as one hull: the middle of the hull's diagonal
-        // face is 4 cm from both bars.
-        let a = box_mesh(Vec3::new(0.05, 0.01, 0.01));
-        let b = box_mesh(Vec3::new(0.01, 0.05, 0.01))
-            .transformed(&Pose3::from_translation(Vec3::new(0.04, 0.04, 0.0)));
-        let l = TriangleMesh::concatenate(&[a, b], std::path::Path::new("l")).unwrap();
+        assert!(
+            error.bulge_max_m < 1e-5 && error.gap_p95_m < 1e-5,
+            "{error:?}"
+        );
+        assert_eq!(error.samples, 2000);
+        // The L as one hull: the middle of the hull's diagonal face is 4 cm from both bars.
+        let l = l_shape();
         let hull = PhysicsObject {
             shape: SharedShape::convex_hull(l.vertices()).unwrap(),
             parts: 1,
@@ -308,18 +239,38 @@ mod tests {
         };
         let error = hull.shape_error(&l, 4000, 1).unwrap();
         assert!(
-            error.max_m > 0.035 && error.max_m < 0.0401 && error.p95_m > 0.02,
+            error.bulge_max_m > 0.035 && error.bulge_max_m < 0.0401 && error.bulge_p95_m > 0.02,
             "{error:?}"
         );
     }
 
     #[test]
-    fn an_l_shape_is_decomposed() {
-        let a = box_mesh(Vec3::new(0.05, 0.01, 0.01));
-        let b = box_mesh(Vec3::new(0.01, 0.05, 0.01))
-            .transformed(&Pose3::from_translation(Vec3::new(0.04, 0.04, 0.0)));
-        let l = TriangleMesh::concatenate(&[a, b], std::path::Path::new("l")).unwrap();
-        let object = PhysicsObject::new(&l, &Default::default()).unwrap();
+    fn the_shell_follows_a_concave_mesh_and_an_open_one_within_the_tolerance() {
+        let l = l_shape();
+        let params = ShapeParams::default();
+        let object = PhysicsObject::new(&l, &params).unwrap();
         assert!(object.num_parts() >= 2, "{object:?}");
+        let error = object.shape_error(&l, 4000, 1).unwrap();
+        assert!(
+            error.bulge_max_m <= params.tolerance_m && error.gap_p95_m < 1e-4,
+            "{error:?}"
+        );
+        // A box without its top: an open scan.
+        let cube = box_mesh(Vec3::splat(0.025));
+        let normals = cube.triangle_normals();
+        let open: Vec<[u32; 3]> = cube
+            .triangles()
+            .iter()
+            .zip(&normals)
+            .filter(|(_, n)| n.z < 0.5)
+            .map(|(t, _)| *t)
+            .collect();
+        let open = TriangleMesh::new(cube.vertices().to_vec(), open).unwrap();
+        let object = PhysicsObject::new(&open, &params).unwrap();
+        let error = object.shape_error(&open, 4000, 1).unwrap();
+        assert!(
+            error.bulge_max_m <= params.tolerance_m && error.gap_p95_m < 1e-4,
+            "{object:?}: {error:?}"
+        );
     }
 }

@@ -16,8 +16,9 @@ use crate::gripper::Gripper;
 use crate::physics::object::PhysicsObject;
 use crate::physics::params::PhysicsParams;
 
-/// Half the side of the square table, metres.
-const TABLE_HALF_SIDE_M: f32 = 1.0;
+/// Half the side of the square table, metres: room for an object a metre across, and small
+/// enough that the table's box in a tilted object's frame stays thin (see [`Scene::new`]).
+const TABLE_HALF_SIDE_M: f32 = 0.6;
 /// Half the thickness of the table slab (its top is z = 0), metres.
 const TABLE_HALF_THICKNESS_M: f32 = 0.05;
 
@@ -30,17 +31,16 @@ pub(crate) struct Scene {
     pub world: PhysicsWorld,
     pub table: ColliderHandle,
     pub object_body: RigidBodyHandle,
-    pub object: ColliderHandle,
+    /// The object's shape (one hull, or a compound of convex parts), in its body frame: for
+    /// exact distances.
+    object_shape: SharedShape,
     /// The pads' twist friction, once the hand is in.
     pads: Vec<PadTwist>,
 }
 
 /// A pad's torsional friction beyond what its contacts give (see [`Scene::step`]).
 struct PadTwist {
-    finger: RigidBodyHandle,
     pad: ColliderHandle,
-    /// Its balls' centres in the finger's body frame, in the pad compound's order.
-    balls: Vec<Vec3>,
     /// A joint from the finger to the object that locks nothing and only brakes their relative
     /// turn about the closing axis, up to the force the step allows.
     joint: ImpulseJointHandle,
@@ -187,9 +187,10 @@ impl Scene {
         // while the fingers sink into it: they would squeeze through a can in a fraction of a
         // second.
         ip.contact_recycling = false;
-        // One manifold per pad ball, as the twist brake reads them: clustering would merge the
-        // balls' manifolds (one normal) into a few points.
-        ip.contact_clustering = false;
+        // No continuous collision detection: nothing moves faster than a few millimetres a step
+        // (the contacts' prediction distance), and its sweeps recomputed every slab's mass
+        // properties each step, a third of a trial's time on a shell of slabs.
+        ip.max_ccd_substeps = 0;
 
         let table_body = world.insert_body(RigidBodyBuilder::fixed());
         let table = world.insert_collider(
@@ -199,23 +200,49 @@ impl Scene {
                 .collision_groups(groups(TABLE_GROUP, Group::ALL)),
             Some(table_body),
         );
-        let (object_body, object) = world.insert(
+        let object_body = world.insert_body(
             RigidBodyBuilder::dynamic()
                 .pose(*table_from_object)
                 .can_sleep(false),
+        );
+        // One collider: the parts turned to stand as they rest on the table, so that the
+        // compound's frame is the table's. rapier finds the parts near another shape by that
+        // shape's box in the compound's frame: in the mesh's own frame the box of a table
+        // tilted under a lying object spans every part, and hundreds of parts then cost
+        // seconds a trial; axis-aligned it holds the parts near the table only.
+        let turn = Pose3::from_rotation(table_from_object.rotation);
+        let parts: Vec<(Pose3, SharedShape)> = object
+            .parts()
+            .into_iter()
+            .map(|(pose, part)| (turn * pose, part))
+            .collect();
+        let shape = match parts.as_slice() {
+            [(pose, only)] if *pose == Pose3::IDENTITY => only.clone(),
+            _ => SharedShape::compound(parts),
+        };
+        let collider_in_body = turn.inverse();
+        world.colliders.insert_with_parent(
             // Friction 1 combined by product: a pair's coefficient is the other collider's, so
             // the table's against the table and the pads' against the hand.
-            ColliderBuilder::new(object.shape().clone())
-                .mass_properties(object.mass_properties(params.object_density_kg_m3))
+            ColliderBuilder::new(shape)
+                .position(collider_in_body)
+                // A collider's mass properties are in its own frame.
+                .mass_properties(
+                    object
+                        .mass_properties(params.object_density_kg_m3)
+                        .transform_by(&turn),
+                )
                 .friction(1.0)
                 .friction_combine_rule(CoefficientCombineRule::Multiply)
                 .collision_groups(groups(OBJECT_GROUP, Group::ALL)),
+            object_body,
+            &mut world.bodies,
         );
         Self {
             world,
             table,
             object_body,
-            object,
+            object_shape: object.shape().clone(),
             pads: Vec::new(),
         }
     }
@@ -240,25 +267,37 @@ impl Scene {
 
     /// (2/3) mu F r less what the pad's contacts resist, newton-metres (0 when untouched).
     fn twist_shortfall(&self, pad: &PadTwist, dt: f32) -> f32 {
-        let Some(finger) = self.world.bodies.get(pad.finger) else {
+        let colliders = &self.world.colliders;
+        let on_object = |handle| {
+            colliders
+                .get(handle)
+                .is_some_and(|c| c.parent() == Some(self.object_body))
+        };
+        // The pad's contacts with the object as the solver saw them (rapier clusters the
+        // manifolds of parallel normals, as a pad's on a flat face, into a few points), each
+        // with its point on the pad in the world and the impulse it bore.
+        let Some(pad_pose) = colliders.get(pad.pad).map(|c| *c.position()) else {
             return 0.0;
         };
-        let Some(pair) = self.world.narrow_phase.contact_pair(pad.pad, self.object) else {
-            return 0.0;
-        };
-        let pad_is_first = pair.collider1 == pad.pad;
-        let loads: Vec<(Vec3, f32)> = pair
-            .manifolds()
-            .iter()
-            .filter_map(|m| {
-                let ball = if pad_is_first {
-                    m.subshape1
-                } else {
-                    m.subshape2
-                };
-                let center = pad.balls.get(ball as usize)?;
-                let impulse: f32 = m.points.iter().map(|p| p.data.impulse.abs()).sum();
-                Some((finger.position().transform_point(*center), impulse))
+        let loads: Vec<(Vec3, f32)> = self
+            .world
+            .narrow_phase
+            .contact_pairs_with(pad.pad)
+            .filter(|pair| on_object(pair.collider1) || on_object(pair.collider2))
+            .flat_map(|pair| {
+                let pad_is_first = pair.collider1 == pad.pad;
+                pair.solver_manifolds().iter().flat_map(move |m| {
+                    let sub = if pad_is_first {
+                        m.subshape_pos1()
+                    } else {
+                        m.subshape_pos2()
+                    };
+                    let frame = pad_pose * sub.copied().unwrap_or(Pose3::IDENTITY);
+                    m.points.iter().map(move |p| {
+                        let local = if pad_is_first { p.local_p1 } else { p.local_p2 };
+                        (frame.transform_point(local), p.data.impulse.abs())
+                    })
+                })
             })
             .collect();
         let total: f32 = loads.iter().map(|(_, impulse)| impulse).sum();
@@ -360,12 +399,7 @@ impl Scene {
                 .motor_max_force(JointAxis::AngX, 0.0);
             let joint = world.insert_impulse_joint(finger, self.object_body, brake);
             self.pads.push(PadTwist {
-                finger,
                 pad: pad_collider,
-                balls: shape
-                    .pad_ball_centers()
-                    .map(|c| mirror.transform_point(c))
-                    .collect(),
                 joint,
                 twist_per_newton_m: 2.0 / 3.0 * friction * shape.pad_radius,
                 friction,
@@ -400,18 +434,22 @@ impl Scene {
     pub fn finger_distance(&self, finger: [ColliderHandle; 2]) -> f32 {
         finger
             .into_iter()
-            .map(|part| self.distance(part, self.object))
+            .map(|part| self.distance_to_object(part))
             .fold(f32::INFINITY, f32::min)
     }
 
-    /// Exact distance between two colliders, metres (0 when they overlap; infinite when either
-    /// is missing or the shapes are not supported).
-    pub fn distance(&self, a: ColliderHandle, b: ColliderHandle) -> f32 {
-        let colliders = &self.world.colliders;
-        match (colliders.get(a), colliders.get(b)) {
-            (Some(a), Some(b)) => query::distance(a.position(), a.shape(), b.position(), b.shape())
-                .map_or(f32::INFINITY, |d| d.distance),
-            _ => f32::INFINITY,
+    /// Exact distance between a collider and the object, metres (0 when they overlap;
+    /// infinite when the collider is missing or the shapes are not supported).
+    pub fn distance_to_object(&self, collider: ColliderHandle) -> f32 {
+        match self.world.colliders.get(collider) {
+            Some(c) => query::distance(
+                c.position(),
+                c.shape(),
+                &self.world_from_object(),
+                &*self.object_shape,
+            )
+            .map_or(f32::INFINITY, |d| d.distance),
+            None => f32::INFINITY,
         }
     }
 
@@ -433,15 +471,17 @@ impl Scene {
             *world_from_pregrasp * Pose3::from_translation(shape.palm_center),
             &shape.palm as &dyn Shape,
         ));
-        let colliders = &self.world.colliders;
-        [self.table, self.object]
-            .into_iter()
-            .filter_map(|handle| colliders.get(handle))
-            .any(|fixed| {
-                moving.iter().any(|(start, shape)| {
-                    path_touches(start, motion, *shape, fixed.position(), fixed.shape())
-                })
-            })
+        let object = (self.world_from_object(), &*self.object_shape);
+        let table = self
+            .world
+            .colliders
+            .get(self.table)
+            .map(|c| (*c.position(), c.shape()));
+        table.into_iter().chain([object]).any(|(pose, fixed)| {
+            moving
+                .iter()
+                .any(|(start, shape)| path_touches(start, motion, *shape, &pose, fixed))
+        })
     }
 }
 

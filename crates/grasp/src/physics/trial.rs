@@ -357,7 +357,7 @@ impl Trial<'_> {
             .finger_colliders
             .iter()
             .all(|&f| scene.finger_distance(f) <= p.contact_tolerance_m);
-        let off_table = scene.distance(scene.object, scene.table) > p.contact_tolerance_m;
+        let off_table = scene.distance_to_object(scene.table) > p.contact_tolerance_m;
         Hold {
             held: fingers_touch
                 && off_table
