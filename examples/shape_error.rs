@@ -29,6 +29,9 @@ struct Args {
     /// Points measured per object.
     #[arg(long, default_value_t = 20_000)]
     samples: usize,
+    /// Also the built-in objects of each category with these indices (e.g. 30,31).
+    #[arg(long, value_delimiter = ',')]
+    builtin: Vec<u32>,
 }
 
 fn main() -> ExitCode {
@@ -52,13 +55,27 @@ fn main() -> ExitCode {
     let (mut measured, mut within, mut within_old) = (0, 0, 0);
     let mut p95s = Vec::new();
     let mut old_p95s = Vec::new();
-    for file in &files {
-        let name = file
-            .strip_prefix(&args.data)
-            .unwrap_or(file)
-            .display()
-            .to_string();
-        let mesh = match load_mesh(file) {
+    let mut items: Vec<(String, Result<TriangleMesh, String>)> = files
+        .iter()
+        .map(|file| {
+            let name = file
+                .strip_prefix(&args.data)
+                .unwrap_or(file)
+                .display()
+                .to_string();
+            (name, load_mesh(file).map_err(|e| e.to_string()))
+        })
+        .collect();
+    for category in mvgrasp_geometry::Category::ALL {
+        for &index in &args.builtin {
+            match mvgrasp_geometry::objects::generate(category, index, 0) {
+                Ok(o) => items.push((o.name, Ok(o.mesh))),
+                Err(e) => items.push((format!("{category:?} {index}"), Err(e.to_string()))),
+            }
+        }
+    }
+    for (name, mesh) in items {
+        let mesh = match mesh {
             Ok(mesh) => mesh,
             Err(e) => {
                 println!("{name:<50} skipped: {e}");

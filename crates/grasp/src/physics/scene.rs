@@ -183,10 +183,11 @@ impl Scene {
         // One Coulomb cone per contact point: the torque a finger pad resists about the closing
         // axis comes from its contact points' spread, which decides off-centre grasps.
         ip.friction_model = FrictionModel::Coulomb;
-        // A held object moves with the fingers, so recycled contacts would never be recomputed
-        // while the fingers sink into it: they would squeeze through a can in a fraction of a
-        // second.
-        ip.contact_recycling = false;
+        // Contacts are recomputed only when a pair has moved by more than 0.3 mm since (rapier's
+        // default, 15 mm at this length unit, let the fingers squeeze through a can on stale
+        // contacts); a resting or held object's pairs are reused, most of a trial's steps.
+        ip.contact_recycling = true;
+        ip.normalized_contact_recycle_distance = 1.0e-3;
         // No continuous collision detection: nothing moves faster than a few millimetres a step
         // (the contacts' prediction distance), and its sweeps recomputed every slab's mass
         // properties each step, a third of a trial's time on a shell of slabs.
@@ -442,13 +443,13 @@ impl Scene {
     /// infinite when the collider is missing or the shapes are not supported).
     pub fn distance_to_object(&self, collider: ColliderHandle) -> f32 {
         match self.world.colliders.get(collider) {
-            Some(c) => query::distance(
+            Some(c) => exact_distance(
                 c.position(),
                 c.shape(),
                 &self.world_from_object(),
                 &*self.object_shape,
             )
-            .map_or(f32::INFINITY, |d| d.distance),
+            .unwrap_or(f32::INFINITY),
             None => f32::INFINITY,
         }
     }
@@ -506,18 +507,51 @@ fn path_touches(
     let mut t = 0.0f32;
     for _ in 0..MAX_SWEEP_QUERIES {
         let pose = Pose3::from_parts(start.translation + motion * t, start.rotation);
-        let Ok(d) = query::distance(&pose, moving, fixed_pose, fixed) else {
+        let Some(d) = exact_distance(&pose, moving, fixed_pose, fixed) else {
             return true;
         };
-        if d.distance <= SWEEP_TOUCH_M {
+        if d <= SWEEP_TOUCH_M {
             return true;
         }
         if t >= 1.0 || length == 0.0 {
             return false;
         }
-        t = (t + d.distance / length).min(1.0);
+        t = (t + d / length).min(1.0);
     }
     true
+}
+
+/// The distance between `a` and `b` (one convex shape or a compound of them), metres; `None` when
+/// parry cannot measure the pair.
+///
+/// A compound is measured part by part, and no part is nearer than the gap between its box and
+/// `a`'s: parry 0.31's GJK puts a cuboid at distance 0 from some convex slabs whose boxes stand
+/// millimetres apart (a finger 4 mm beside a can's rim), so the box gap bounds it from below.
+fn exact_distance(pose_a: &Pose3, a: &dyn Shape, pose_b: &Pose3, b: &dyn Shape) -> Option<f32> {
+    let Some(compound) = b.as_compound() else {
+        return query::distance(pose_a, a, pose_b, b)
+            .ok()
+            .map(|d| d.distance);
+    };
+    let box_a = a.compute_aabb(pose_a);
+    let mut best = f32::INFINITY;
+    for (part_pose, part) in compound.shapes() {
+        let world = *pose_b * *part_pose;
+        let gap = aabb_gap(&box_a, &part.compute_aabb(&world));
+        if gap >= best {
+            continue;
+        }
+        let d = query::distance(pose_a, a, &world, &**part).ok()?.distance;
+        best = best.min(d.max(gap));
+    }
+    Some(best)
+}
+
+/// The distance between two boxes (0 when they overlap).
+fn aabb_gap(a: &parry3d::bounding_volume::Aabb, b: &parry3d::bounding_volume::Aabb) -> f32 {
+    let below = (b.mins - a.maxs).max(Vec3::ZERO);
+    let above = (a.mins - b.maxs).max(Vec3::ZERO);
+    (below + above).length()
 }
 
 /// The finger motors' velocity gain: large, so a finger moves at the closing speed until its

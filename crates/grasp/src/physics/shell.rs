@@ -96,7 +96,8 @@ pub(crate) struct SignedMesh {
     trimesh: TriMesh,
     /// -1 when the mesh's triangles wind inwards.
     sign: f32,
-    /// The triangles' corners, for winding numbers.
+    /// The triangles' corners, for winding numbers; empty unless the mesh is closed (no hole,
+    /// no misoriented edge): an open mesh's winding number is a half near its holes.
     corners: Vec<[Vec3; 3]>,
 }
 
@@ -113,11 +114,16 @@ impl SignedMesh {
             detail: format!("cannot be queried: {e}"),
             path: mesh.origin().to_path_buf(),
         })?;
-        let corners = mesh
-            .triangles()
-            .iter()
-            .map(|&t| mesh.triangle_corners(t))
-            .collect();
+        let topology = mesh.topology();
+        let closed = topology.boundary_edges == 0 && topology.misoriented_edges == 0;
+        let corners = if closed {
+            mesh.triangles()
+                .iter()
+                .map(|&t| mesh.triangle_corners(t))
+                .collect()
+        } else {
+            Vec::new()
+        };
         Ok(Self {
             trimesh,
             sign,
@@ -133,7 +139,7 @@ impl SignedMesh {
         let projection = self.trimesh.project_local_point(point, false);
         let distance = projection.point.distance(point);
         let inside = projection.is_inside != (self.sign < 0.0);
-        if inside || (distance > 1.0e-5 && self.winding_number(point) >= 0.5) {
+        if inside || (distance > 1.0e-5 && self.winding_inside(point)) {
             -distance
         } else {
             distance
@@ -146,7 +152,13 @@ impl SignedMesh {
         let projection = self.trimesh.project_local_point(point, false);
         projection.point.distance(point) > margin
             && projection.is_inside == (self.sign < 0.0)
-            && self.winding_number(point) < 0.5
+            && !self.winding_inside(point)
+    }
+
+    /// Whether a closed mesh's winding number at `point` is at least a half (never for an open
+    /// mesh).
+    fn winding_inside(&self, point: Vec3) -> bool {
+        !self.corners.is_empty() && self.winding_number(point) >= 0.5
     }
 
     /// The mesh's generalised winding number at `point`: the solid angle its triangles subtend,
@@ -332,7 +344,7 @@ impl Shell<'_> {
     }
 }
 
-/// One triangle's slab ([`slab`]), made thinner (down to an eighth) until none of its inner
+/// One triangle's slab ([`slab`]), made thinner (down to an eighth, and [`MIN_SLAB_M`]) until none of its inner
 /// corners stands outside the mesh by more than the tolerance: at a concave crease or a sharp
 /// edge a full-depth slab can come out through a neighbouring face.
 fn triangle_slab(
@@ -348,10 +360,10 @@ fn triangle_slab(
         let inside = corners
             .iter()
             .all(|c| !signed.sticks_out(*c - normal * depth, params.tolerance_m));
-        if inside {
+        if inside || depth <= MIN_SLAB_M {
             break;
         }
-        depth /= 2.0;
+        depth = (depth / 2.0).max(MIN_SLAB_M);
     }
     hull_with_inner(corners.to_vec(), normal, depth)
 }
@@ -380,7 +392,10 @@ fn slab(
 }
 
 /// How deep a slab under `points` goes: `thickness_m`, or under half the object's depth where a
-/// ray from one of them into the object meets its far side sooner.
+/// ray from one of them into the object meets its far side sooner; never under [`MIN_SLAB_M`].
+/// A ray that meets the surface within [`MIN_SLAB_M`] has grazed a neighbouring face at an
+/// edge, not crossed the object, and is not counted (the bulge check catches a slab that comes
+/// out).
 fn slab_depth(signed: &SignedMesh, points: &[Vec3], normal: Vec3, thickness_m: f32) -> f32 {
     let mut depth = thickness_m;
     for p in points {
@@ -388,12 +403,17 @@ fn slab_depth(signed: &SignedMesh, points: &[Vec3], normal: Vec3, thickness_m: f
         if let Some(hit) = signed
             .trimesh
             .cast_local_ray(&ray, 2.0 * thickness_m, false)
+            .filter(|&hit| hit >= MIN_SLAB_M)
         {
-            depth = depth.min(0.45 * hit.max(1.0e-4));
+            depth = depth.min(0.45 * hit);
         }
     }
-    depth
+    depth.max(MIN_SLAB_M)
 }
+
+/// The thinnest slab, metres: parry's distance and contact queries fail on nearly flat convex
+/// polyhedra (a 0.05 mm slab along a can's rim read as touching a finger 4 mm away).
+const MIN_SLAB_M: f32 = 1.0e-3;
 
 /// The convex hull of `points` and of the same points pushed `depth` along `-normal`.
 fn hull_with_inner(mut points: Vec<Vec3>, normal: Vec3, depth: f32) -> Option<SharedShape> {
@@ -402,14 +422,23 @@ fn hull_with_inner(mut points: Vec<Vec3>, normal: Vec3, depth: f32) -> Option<Sh
     SharedShape::convex_hull(&points)
 }
 
-/// Whether no point of `shape`'s surface (sampled, about one per 4 mm^2, at least 32) stands
-/// further than `tolerance_m` outside the mesh.
+/// Whether no point of `shape`'s surface (its corners, and samples about one per 4 mm^2, at
+/// least 32) stands further than `tolerance_m` outside the mesh.
 pub(crate) fn bulge_within(
     shape: &SharedShape,
     signed: &SignedMesh,
     tolerance_m: f32,
     rng: &mut ChaCha8Rng,
 ) -> bool {
+    // Every corner (a thin spike has little area for the samples to land on), then the faces.
+    let corners_inside = shape.as_convex_polyhedron().is_none_or(|hull| {
+        hull.points()
+            .iter()
+            .all(|p| !signed.sticks_out(*p, tolerance_m))
+    });
+    if !corners_inside {
+        return false;
+    }
     let faces = faces_of(&[(Pose3::IDENTITY, &**shape)]);
     let area: f32 = faces.iter().map(|f| f.area).sum();
     let count = ((area / 4.0e-6) as usize).clamp(32, 4096);
