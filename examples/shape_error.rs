@@ -83,7 +83,10 @@ fn main() -> ExitCode {
             }
         };
         let start = Instant::now();
-        let params = ShapeParams::default();
+        let params = ShapeParams {
+            shell: true,
+            ..ShapeParams::default()
+        };
         let object = match PhysicsObject::new(&mesh, &params) {
             Ok(object) => object,
             Err(e) => {

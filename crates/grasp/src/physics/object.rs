@@ -74,7 +74,11 @@ impl PhysicsObject {
                 unit_mass,
             });
         }
-        let parts = shell::shell_parts(mesh, &signed, params)?;
+        let parts = if params.shell {
+            shell::shell_parts(mesh, &signed, params)?
+        } else {
+            vhacd_parts(mesh, &unit_mass, hull)
+        };
         let count = parts.len();
         let shape = SharedShape::compound(
             parts
@@ -136,6 +140,25 @@ impl PhysicsObject {
             inertia,
         )
     }
+}
+
+/// The shapes without the shell: the hull when it encloses at most 2 % more than the mesh (or the
+/// decomposition fails), else VHACD's convex parts at default settings.
+fn vhacd_parts(mesh: &TriangleMesh, unit_mass: &MassFacts, hull: SharedShape) -> Vec<SharedShape> {
+    let hull_volume = hull.mass_properties(1.0).mass();
+    if hull_volume <= 1.02 * unit_mass.volume_m3 {
+        return vec![hull];
+    }
+    let parts: Vec<SharedShape> = mesh
+        .convex_decomposition(&mvgrasp_geometry::DecompositionParams::default())
+        .map(|parts| {
+            parts
+                .iter()
+                .filter_map(|part| SharedShape::convex_hull(part.vertices()))
+                .collect()
+        })
+        .unwrap_or_default();
+    if parts.is_empty() { vec![hull] } else { parts }
 }
 
 impl PhysicsObject {
@@ -247,7 +270,10 @@ mod tests {
     #[test]
     fn the_shell_follows_a_concave_mesh_and_an_open_one_within_the_tolerance() {
         let l = l_shape();
-        let params = ShapeParams::default();
+        let params = ShapeParams {
+            shell: true,
+            ..ShapeParams::default()
+        };
         let object = PhysicsObject::new(&l, &params).unwrap();
         assert!(object.num_parts() >= 2, "{object:?}");
         let error = object.shape_error(&l, 4000, 1).unwrap();

@@ -26,6 +26,12 @@ use crate::error::{GraspError, Result};
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ShapeParams {
+    /// Shape a non-convex object as a shell of slabs along its surface (within `tolerance_m`);
+    /// when false (the default) as VHACD's convex parts, which bulge a few millimetres past the
+    /// surface. Off by default because the shell's thin slabs meet a parry 0.31 distance fault
+    /// (a cuboid reported touching a slab millimetres away) that fails grasps at the approach;
+    /// see the README's physics section.
+    pub shell: bool,
     /// No part may stand further than this outside the mesh, metres.
     pub tolerance_m: f32,
     /// A slab reaches this far into the object (less where the object is thinner), metres.
@@ -40,6 +46,7 @@ impl Default for ShapeParams {
     /// 1 mm tolerance, 4 mm slabs, patches up to 12 cm across turning up to 60 degrees.
     fn default() -> Self {
         Self {
+            shell: false,
             tolerance_m: 1.0e-3,
             thickness_m: 4.0e-3,
             max_patch_m: 0.12,
