@@ -33,8 +33,12 @@ def test_a_shipped_network_loads_with_its_description() -> None:
     assert description["format"] == "mvgrasp-gqcnn/1"
     assert description["architecture"]["pose_inputs"] == 2
     assert description["architecture"]["image_size_px"] == 32
-    # Exported before the input contract was recorded: the planner uses the datasets' defaults.
-    assert description["input"] is None
+    # The input contract the training recorded: the PhoXi S's 96-pixel window scaled to 32.
+    contract = description["input"]
+    assert contract["crop_window_px"] == 96
+    assert contract["crop_size_px"] == 32
+    assert contract["focal_px"] == pytest.approx(552.5)
+    assert contract["pose_inputs"] == ["grasp_depth_m", "theta_rad"]
 
 
 def test_a_broken_export_raises_weights_error_naming_the_file(tmp_path: Path) -> None:
