@@ -2,8 +2,8 @@
 //! `../shared/data/meshes` (and the first `--random-urdfs` of pybullet's random objects), the
 //! bulge (how far the collision shape's surface stands outside the mesh: median, 95th percentile,
 //! largest) and the gap (95th percentile of how far the mesh's surface lies outside the shape),
-//! in millimetres, with the shape's parts and build time; beside them the bulge of the shape the
-//! trial used before (the hull within 2 % of the mesh's volume, else VHACD's parts).
+//! in millimetres, with the shell's parts and build time; beside them the parts and bulge of the
+//! default shape (the shell off: the hull, or VHACD's parts).
 //!
 //! ```sh
 //! cargo run --release --example shape_error -- [--data ../shared/data/meshes] [--random-urdfs 20]
@@ -14,9 +14,8 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use clap::Parser;
-use mvgrasp_geometry::{DecompositionParams, TriangleMesh, load_mesh};
-use mvgrasp_grasp::physics::{PhysicsObject, ShapeParams, shape_error};
-use parry3d::shape::SharedShape;
+use mvgrasp_geometry::{TriangleMesh, load_mesh};
+use mvgrasp_grasp::physics::{PhysicsObject, ShapeParams};
 
 #[derive(Parser)]
 struct Args {
@@ -102,8 +101,15 @@ fn main() -> ExitCode {
                 continue;
             }
         };
-        let (old_parts, old) = old_shape(&mesh);
-        let old_p95 = shape_error(&old, &mesh, args.samples, 1).map_or(f32::NAN, |e| e.bulge_p95_m);
+        // The default shape (the shell off): the hull, or VHACD's parts.
+        let (old_parts, old_p95) = match PhysicsObject::new(&mesh, &ShapeParams::default()) {
+            Ok(old) => (
+                old.num_parts(),
+                old.shape_error(&mesh, args.samples, 1)
+                    .map_or(f32::NAN, |e| e.bulge_p95_m),
+            ),
+            Err(_) => (0, f32::NAN),
+        };
         measured += 1;
         within += usize::from(error.bulge_p95_m <= 1e-3);
         within_old += usize::from(old_p95 <= 1e-3);
@@ -128,38 +134,11 @@ fn main() -> ExitCode {
     };
     println!(
         "\n{measured} objects. Bulge p95 within 1 mm: {within} now (median {:.2} mm), {within_old} \
-         with the old shapes (median {:.2} mm)",
+         with the default shapes (median {:.2} mm)",
         median(&mut p95s),
         median(&mut old_p95s)
     );
     ExitCode::SUCCESS
-}
-
-/// The shape the trial used before the shell: the convex hull when it encloses at most 2 % more
-/// than the mesh, else VHACD's parts (default parameters); with its part count.
-fn old_shape(mesh: &TriangleMesh) -> (usize, SharedShape) {
-    let hull = mesh.convex_hull().ok();
-    let hull_shape = hull
-        .as_ref()
-        .and_then(|h| SharedShape::convex_hull(h.vertices()));
-    let convex = match (&hull, mesh.mass_facts(1.0)) {
-        (Some(h), Ok(m)) => h.signed_volume_m3() <= 1.02 * m.volume_m3,
-        _ => true,
-    };
-    if !convex && let Ok(parts) = mesh.convex_decomposition(&DecompositionParams::default()) {
-        let shapes: Vec<_> = parts
-            .iter()
-            .filter_map(|p| SharedShape::convex_hull(p.vertices()))
-            .map(|s| (mvgrasp_geometry::Pose3::IDENTITY, s))
-            .collect();
-        if !shapes.is_empty() {
-            return (shapes.len(), SharedShape::compound(shapes));
-        }
-    }
-    match hull_shape {
-        Some(h) => (1, h),
-        None => (0, SharedShape::ball(1e-3)),
-    }
 }
 
 fn is_random(path: &Path) -> bool {

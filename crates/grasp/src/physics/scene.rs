@@ -68,8 +68,12 @@ pub const PAD_BALL_RADIUS_M: f32 = 2.0e-3;
 /// the finger's inner face: (2/3) `pad_radius_m`, the mean lever arm of a round pad pressed
 /// evenly, metres.
 pub fn pad_ring_radius(gripper: &Gripper) -> f32 {
-    2.0 / 3.0 * gripper.pad_radius_m
+    PAD_LEVER * gripper.pad_radius_m
 }
+/// The mean lever arm of a round pad pressed evenly, over its radius: its torsional friction is
+/// (2/3) mu F r.
+const PAD_LEVER: f32 = 2.0 / 3.0;
+
 /// Balls per simulated pad.
 pub const PAD_BALLS: usize = 4;
 /// In the simulated hand a finger's box stands this far back from the pad's face, so that the
@@ -152,7 +156,7 @@ impl HandShape {
     fn pad_ball_centers(&self) -> impl Iterator<Item = Vec3> {
         let face_x = -self.finger.half_extents.x + PAD_BALL_RADIUS_M;
         let pad_z = self.pad_z - self.finger_z;
-        let ring = 2.0 / 3.0 * self.pad_radius; // pad_ring_radius
+        let ring = PAD_LEVER * self.pad_radius;
         (0..PAD_BALLS).map(move |i| {
             let angle = std::f32::consts::TAU * i as f32 / PAD_BALLS as f32;
             let (sin, cos) = angle.sin_cos();
@@ -402,7 +406,7 @@ impl Scene {
             self.pads.push(PadTwist {
                 pad: pad_collider,
                 joint,
-                twist_per_newton_m: 2.0 / 3.0 * friction * shape.pad_radius,
+                twist_per_newton_m: PAD_LEVER * friction * shape.pad_radius,
                 friction,
             });
         }
