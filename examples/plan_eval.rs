@@ -5,7 +5,7 @@
 //!
 //! ```text
 //! cargo run --release --example plan_eval -- [--per-category 2] [--data ../shared/data/meshes]
-//!     [--camera phoxi_s|primesense|realsense_d435] [--top-down-only]
+//!     [--camera phoxi_s|primesense|realsense_d435] [--top-down-only] [--shell]
 //! ```
 //!
 //! `--camera` renders every view with another camera's intrinsics: the planner scales its
@@ -56,11 +56,17 @@ struct Args {
     /// Return the best-scored grasp without the hand check against the observed depth.
     #[arg(long)]
     no_hand_check: bool,
+    /// Shape the objects in the physics trial as a shell of slabs along the surface (within
+    /// 1 mm) instead of the hull or VHACD's parts.
+    #[arg(long)]
+    shell: bool,
 }
 
 #[derive(Default)]
 struct Tally {
     planned: usize,
+    /// Chosen grasps the exact-mesh collision check passes.
+    free: usize,
     robust: usize,
     /// Trials whose object stayed in its pose until the gripper came.
     tried: usize,
@@ -113,7 +119,9 @@ fn run(args: &Args) -> Result<(), String> {
         }
     );
     let mut tallies: Vec<Tally> = policies.iter().map(|_| Tally::default()).collect();
-    println!("object                         policy                 quality  robust  physics");
+    println!(
+        "object                         policy                 quality  free  robust  physics"
+    );
     for (name, mesh) in &objects {
         for ((label, model, views, radius_m), tally) in policies.iter().zip(&mut tallies) {
             let mut params = PlanParams {
@@ -122,6 +130,7 @@ fn run(args: &Args) -> Result<(), String> {
                 hand_check: !args.no_hand_check,
                 ..Default::default()
             };
+            params.labels.physics_shape.shell = args.shell;
             params.views.radius_m = *radius_m;
             let gripper = params.labels.gripper().map_err(|e| e.to_string())?;
             let net = model.load().map_err(|e| e.to_string())?;
@@ -144,6 +153,7 @@ fn run(args: &Args) -> Result<(), String> {
             };
             tally.planned += 1;
             let robust = report.analytic.is_some_and(|a| a.robust);
+            let free = report.analytic.is_some_and(|a| a.collision_free);
             let held = report.physics.is_some_and(|p| p.success);
             // A trial whose object toppled from its analytic stable pose while settling tests
             // the pose, not the grasp: left out of the physics rate.
@@ -151,6 +161,7 @@ fn run(args: &Args) -> Result<(), String> {
                 .physics
                 .is_some_and(|p| p.failed_at != Some(FailureStage::Settle));
             tally.robust += usize::from(robust);
+            tally.free += usize::from(free);
             tally.tried += usize::from(settled);
             tally.held += usize::from(held);
             let physics = report
@@ -160,21 +171,23 @@ fn run(args: &Args) -> Result<(), String> {
                     Some(stage) => format!("{stage:?}"),
                 });
             println!(
-                "{name:<30} {label:<22} {:>7.3}  {:>6}  {physics}",
+                "{name:<30} {label:<22} {:>7.3}  {:>4}  {:>6}  {physics}",
                 best.quality,
+                if free { "yes" } else { "no" },
                 if robust { "yes" } else { "no" }
             );
         }
     }
     println!("\n{} objects", objects.len());
     println!(
-        "policy                 planned  robust label  held in physics (of trials)  plan time/object"
+        "policy                 planned  collision-free  robust label  held in physics (of trials)  plan time/object"
     );
     for ((label, ..), t) in policies.iter().zip(&tallies) {
         let pct = |k: usize, n: usize| 100.0 * k as f64 / n.max(1) as f64;
         println!(
-            "{label:<22} {:>7}  {:>11.0}%  {:>9.0}% ({:>2} of {:>2})  {:>14.2} s",
+            "{label:<22} {:>7}  {:>13.0}%  {:>11.0}%  {:>9.0}% ({:>2} of {:>2})  {:>14.2} s",
             t.planned,
+            pct(t.free, t.planned),
             pct(t.robust, t.planned),
             pct(t.held, t.tried),
             t.held,

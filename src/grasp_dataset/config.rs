@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use mvgrasp_geometry::{Intrinsics, IntrinsicsPreset};
-use mvgrasp_grasp::physics::{PhysicsObject, PhysicsParams};
+use mvgrasp_grasp::physics::{PhysicsObject, PhysicsParams, ShapeParams};
 use mvgrasp_grasp::quality::RobustQualityParams;
 use mvgrasp_grasp::{Gripper, GripperPreset, LabelParams, SamplingParams};
 pub use mvgrasp_planner::CropParams;
@@ -49,6 +49,9 @@ pub struct GraspDatasetConfig {
     pub quality: RobustQualityParams,
     /// Physics trials.
     pub physics: PhysicsParams,
+    /// How the physics trials shape each object (the hull or VHACD's parts by default; a shell
+    /// of slabs along the surface with `shell = true`).
+    pub physics_shape: ShapeParams,
 }
 
 impl Default for GraspDatasetConfig {
@@ -72,6 +75,7 @@ impl Default for GraspDatasetConfig {
             },
             quality: RobustQualityParams::default(),
             physics: PhysicsParams::default(),
+            physics_shape: ShapeParams::default(),
         }
     }
 }
@@ -274,6 +278,7 @@ impl GraspDatasetConfig {
         self.sampling.validate()?;
         self.quality.validate()?;
         self.physics.validate()?;
+        self.physics_shape.validate()?;
         Ok(())
     }
 

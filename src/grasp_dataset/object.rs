@@ -67,7 +67,7 @@ pub(crate) fn object_datapoints(
     let physics_object = if config.physics_fraction > 0.0 {
         Some(PhysicsObject::from_grasp_object(
             &object,
-            &Default::default(),
+            &config.physics_shape,
         )?)
     } else {
         None

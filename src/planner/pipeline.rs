@@ -193,7 +193,7 @@ pub fn check_grasp(
     let body = if params.physics {
         Some(PhysicsObject::from_grasp_object(
             object,
-            &Default::default(),
+            &params.labels.physics_shape,
         )?)
     } else {
         None

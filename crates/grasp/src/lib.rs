@@ -11,6 +11,7 @@ pub mod object;
 pub mod physics;
 pub mod quality;
 pub mod sampling;
+mod separation;
 
 pub use analysis::{AnalysedGrasp, Analysis, AnalysisConfig, analyse};
 pub use collision::{Collision, CollisionParams, HandShapes, check_collision};

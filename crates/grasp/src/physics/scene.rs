@@ -15,6 +15,7 @@ use rapier3d::prelude::{
 use crate::gripper::Gripper;
 use crate::physics::object::PhysicsObject;
 use crate::physics::params::PhysicsParams;
+use crate::separation::cuboid_hull_gap;
 
 /// Half the side of the square table, metres: room for an object a metre across, and small
 /// enough that the table's box in a tilted object's frame stays thin (see [`Scene::new`]).
@@ -529,8 +530,8 @@ fn path_touches(
 /// parry cannot measure the pair.
 ///
 /// A compound is measured part by part, and no part is nearer than the gap between its box and
-/// `a`'s: parry 0.31's GJK puts a cuboid at distance 0 from some convex slabs whose boxes stand
-/// millimetres apart (a finger 4 mm beside a can's rim), so the box gap bounds it from below.
+/// `a`'s. Where GJK reads a box as touching a convex part, the separating axes decide (see
+/// [`crate::separation`]: parry 0.31's GJK reads thin slabs millimetres away as touching).
 fn exact_distance(pose_a: &Pose3, a: &dyn Shape, pose_b: &Pose3, b: &dyn Shape) -> Option<f32> {
     let Some(compound) = b.as_compound() else {
         return query::distance(pose_a, a, pose_b, b)
@@ -545,7 +546,12 @@ fn exact_distance(pose_a: &Pose3, a: &dyn Shape, pose_b: &Pose3, b: &dyn Shape) 
         if gap >= best {
             continue;
         }
-        let d = query::distance(pose_a, a, &world, &**part).ok()?.distance;
+        let mut d = query::distance(pose_a, a, &world, &**part).ok()?.distance;
+        if d <= SWEEP_TOUCH_M
+            && let (Some(cuboid), Some(hull)) = (a.as_cuboid(), part.as_convex_polyhedron())
+        {
+            d = d.max(cuboid_hull_gap(cuboid, pose_a, hull, &world));
+        }
         best = best.min(d.max(gap));
     }
     Some(best)
@@ -604,5 +610,16 @@ mod tests {
         let short = HandShape::new(&short, 0.08);
         let pre = Pose3::from_parts(Vec3::new(0.0, 0.0, 0.09), down);
         assert!(scene.sweep_hits(&short, &pre, Vec3::new(0.0, 0.0, -0.08)));
+    }
+
+    /// The sweep's distance to a compound of slabs backs GJK with the separating axes: a 1 mm
+    /// slab about 5 mm beside a finger-sized box (GJK: 0) is about 5 mm away.
+    #[test]
+    fn a_slab_beside_a_box_is_apart_for_the_sweep() {
+        let (points, finger, pose) = crate::separation::slab_beside_a_box();
+        let slab = SharedShape::convex_hull(&points).unwrap();
+        let compound = SharedShape::compound(vec![(Pose3::IDENTITY, slab)]);
+        let d = exact_distance(&pose, &finger, &Pose3::IDENTITY, &*compound).unwrap();
+        assert!((0.0045..=0.0055).contains(&d), "{d}");
     }
 }

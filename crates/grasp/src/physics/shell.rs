@@ -28,9 +28,10 @@ use crate::error::{GraspError, Result};
 pub struct ShapeParams {
     /// Shape a non-convex object as a shell of slabs along its surface (within `tolerance_m`);
     /// when false (the default) as VHACD's convex parts, which bulge a few millimetres past the
-    /// surface. Off by default because the shell's thin slabs meet a parry 0.31 distance fault
-    /// (a cuboid reported touching a slab millimetres away) that fails grasps at the approach;
-    /// see the README's physics section.
+    /// surface. Off by default: parry 0.31's GJK reads a box millimetres beside a thin slab as
+    /// touching it; the trial's approach sweep now backs it with separating axes
+    /// ([`crate::separation`]), but rapier's contacts come from the same GJK, and with the shell
+    /// the planner's collision-free choices held less often (see the README's physics section).
     pub shell: bool,
     /// No part may stand further than this outside the mesh, metres.
     pub tolerance_m: f32,
