@@ -11,7 +11,8 @@
 //! bounds the distance from below.
 
 use mvgrasp_geometry::{Pose3, Vec3};
-use parry3d::shape::{ConvexPolyhedron, Cuboid};
+use parry3d::bounding_volume::BoundingVolume;
+use parry3d::shape::{ConvexPolyhedron, Cuboid, TriMesh, Triangle};
 
 /// The box's own axes (its frame).
 const BOX_AXES: [Vec3; 3] = [Vec3::X, Vec3::Y, Vec3::Z];
@@ -78,6 +79,45 @@ pub(crate) fn cuboid_hull_gap(
     )
 }
 
+/// The separating gap between a box of half extents `half` and `triangle`, given in the box's
+/// frame, metres: exact for overlap, a lower bound on the distance otherwise.
+fn box_triangle_gap(half: Vec3, triangle: &Triangle) -> f32 {
+    let [a, b, c] = [triangle.a, triangle.b, triangle.c];
+    box_polytope_gap(
+        half,
+        &[a, b, c],
+        [(b - a).cross(c - a)],
+        [b - a, c - b, a - c],
+    )
+}
+
+/// A lower bound on the distance between `cuboid` at `pose_cuboid` and the surface of `mesh` at
+/// `pose_mesh`, capped at `reach`, metres; 0 when the box meets a triangle. Only the triangles
+/// whose boxes come within `reach` of the cuboid's box are measured (the others are further).
+pub(crate) fn cuboid_mesh_gap(
+    cuboid: &Cuboid,
+    pose_cuboid: &Pose3,
+    mesh: &TriMesh,
+    pose_mesh: &Pose3,
+    reach: f32,
+) -> f32 {
+    let mesh_from_cuboid = pose_mesh.inverse() * *pose_cuboid;
+    let near = cuboid.aabb(&mesh_from_cuboid).loosened(reach);
+    let cuboid_from_mesh = mesh_from_cuboid.inverse();
+    mesh.bvh()
+        .intersect_aabb(&near)
+        .map(|i| {
+            let t = mesh.triangle(i);
+            let local = Triangle::new(
+                cuboid_from_mesh.transform_point(t.a),
+                cuboid_from_mesh.transform_point(t.b),
+                cuboid_from_mesh.transform_point(t.c),
+            );
+            box_triangle_gap(cuboid.half_extents, &local)
+        })
+        .fold(reach, f32::min)
+}
+
 /// A case parry 0.31's GJK gets wrong: the corners of a 1 mm slab (a triangle's prism), a
 /// finger-sized box, and the box's pose about 5 mm beside the slab (GJK: distance 0). The
 /// nearest slab corner, (-0.007, 0.008, z), is 5 mm past the box's +x face (at -0.012) and
@@ -138,5 +178,25 @@ mod tests {
         // Overlapping.
         let gap = cuboid_hull_gap(&finger, &origin, &cube(0.01), &at(0.01, 0.0, 0.0));
         assert_eq!(gap, 0.0);
+    }
+
+    /// A box's distance to a mesh's surface: a cube's faces 2 mm and 3 cm away, a triangle
+    /// through the box, and the cap.
+    #[test]
+    fn the_mesh_gap_finds_the_nearest_triangle() {
+        let (v, t) = Cuboid::new(Vec3::splat(0.025)).to_trimesh();
+        let cube = TriMesh::new(v, t).unwrap();
+        let finger = Cuboid::new(Vec3::new(0.005, 0.01, 0.025));
+        let at = |x: f32| Pose3::from_translation(Vec3::new(x, 0.0, 0.0));
+        let near = cuboid_mesh_gap(&finger, &at(0.032), &cube, &Pose3::IDENTITY, 0.02);
+        assert!((near - 0.002).abs() < 1e-5, "{near}");
+        let far = cuboid_mesh_gap(&finger, &at(0.06), &cube, &Pose3::IDENTITY, 0.02);
+        assert_eq!(far, 0.02, "beyond the reach: the cap");
+        let through = cuboid_mesh_gap(&finger, &at(0.025), &cube, &Pose3::IDENTITY, 0.02);
+        assert_eq!(through, 0.0);
+        // A 1 cm box inside the cube, clear of its faces (2 cm away): the surface is not met.
+        let small = Cuboid::new(Vec3::splat(0.005));
+        let inside = cuboid_mesh_gap(&small, &at(0.0), &cube, &Pose3::IDENTITY, 0.02);
+        assert!(inside > 0.0, "{inside}");
     }
 }

@@ -4,7 +4,9 @@
 use mvgrasp_geometry::{MassFacts, Pose3, TriangleMesh, Vec3};
 use parry3d::mass_properties::MassProperties;
 use parry3d::math::Mat3;
-use parry3d::shape::SharedShape;
+use std::sync::Arc;
+
+use parry3d::shape::{SharedShape, TriMesh};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -16,15 +18,20 @@ use crate::object::{GraspObject, OBJECT_EXTENT_RANGE_M};
 /// An object ready for physics trials (frame: the mesh's own): its collision shape and the
 /// mesh's own mass facts at a density of 1 kg/m^3 (scaled by each trial's density).
 ///
-/// The collision shape follows the mesh's surface within [`ShapeParams::tolerance_m`]: the
-/// mesh's convex hull when no point of the hull stands further outside the mesh, else a shell of
-/// convex slabs along the surface ([`crate::physics::shell`]). Mass, centre of mass and inertia
-/// come from the mesh itself, not from the shape.
+/// The collision shape is the mesh's convex hull when no point of the hull stands further than
+/// [`ShapeParams::tolerance_m`] outside the mesh; else, by default, the hull when it adds at most
+/// 2 % to the volume and VHACD's convex parts otherwise, or with [`ShapeParams::shell`] a shell
+/// of convex slabs along the surface ([`crate::physics::shell`]). The approach is checked
+/// against the mesh's own surface. Mass, centre of mass and inertia come from the mesh itself,
+/// not from the shape.
 #[derive(Clone)]
 pub struct PhysicsObject {
     shape: SharedShape,
     parts: usize,
     unit_mass: MassFacts,
+    /// The mesh's own surface, for the approach: the hand's path is checked against the true
+    /// surface, not the collision shape (which may bulge past it).
+    surface: Arc<TriMesh>,
 }
 
 impl std::fmt::Debug for PhysicsObject {
@@ -72,6 +79,7 @@ impl PhysicsObject {
                 shape: hull,
                 parts: 1,
                 unit_mass,
+                surface: Arc::new(signed.into_trimesh()),
             });
         }
         let parts = if params.shell {
@@ -90,6 +98,7 @@ impl PhysicsObject {
             shape,
             parts: count,
             unit_mass,
+            surface: Arc::new(signed.into_trimesh()),
         })
     }
 
@@ -109,6 +118,11 @@ impl PhysicsObject {
     /// The collision shape, object frame: one convex hull, or a compound of convex parts.
     pub fn shape(&self) -> &SharedShape {
         &self.shape
+    }
+
+    /// The mesh's surface, object frame.
+    pub(crate) fn surface(&self) -> &Arc<TriMesh> {
+        &self.surface
     }
 
     /// The convex parts with their poses, object frame.
@@ -259,6 +273,7 @@ mod tests {
             shape: SharedShape::convex_hull(l.vertices()).unwrap(),
             parts: 1,
             unit_mass: object.unit_mass,
+            surface: object.surface.clone(),
         };
         let error = hull.shape_error(&l, 4000, 1).unwrap();
         assert!(

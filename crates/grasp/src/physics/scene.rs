@@ -5,17 +5,18 @@
 use mvgrasp_geometry::{Pose3, Vec3};
 use parry3d::query;
 use parry3d::shape::SharedShape;
-use parry3d::shape::{Cuboid, Shape};
+use parry3d::shape::{Cuboid, Shape, TriMesh};
 use rapier3d::prelude::{
     CoefficientCombineRule, ColliderBuilder, ColliderHandle, FrictionModel, GenericJointBuilder,
     Group, ImpulseJointHandle, InteractionGroups, InteractionTestMode, JointAxesMask, JointAxis,
     PhysicsWorld, PrismaticJointBuilder, RigidBodyBuilder, RigidBodyHandle, SpringCoefficients,
 };
+use std::sync::Arc;
 
 use crate::gripper::Gripper;
 use crate::physics::object::PhysicsObject;
 use crate::physics::params::PhysicsParams;
-use crate::separation::cuboid_hull_gap;
+use crate::separation::{cuboid_hull_gap, cuboid_mesh_gap};
 
 /// Half the side of the square table, metres: room for an object a metre across, and small
 /// enough that the table's box in a tilted object's frame stays thin (see [`Scene::new`]).
@@ -35,6 +36,8 @@ pub(crate) struct Scene {
     /// The object's shape (one hull, or a compound of convex parts), in its body frame: for
     /// exact distances.
     object_shape: SharedShape,
+    /// The object's true surface, in its body frame: for the approach.
+    object_surface: Arc<TriMesh>,
     /// The pads' twist friction, once the hand is in.
     pads: Vec<PadTwist>,
 }
@@ -249,6 +252,7 @@ impl Scene {
             table,
             object_body,
             object_shape: object.shape().clone(),
+            object_surface: object.surface().clone(),
             pads: Vec::new(),
         }
     }
@@ -468,25 +472,37 @@ impl Scene {
     /// steps of the current distance. (parry 0.31's `cast_shapes` between a cuboid and a convex
     /// polyhedron reports hits for fingers passing 8 mm beside a box, so it is not used.)
     pub fn sweep_hits(&self, shape: &HandShape, world_from_pregrasp: &Pose3, motion: Vec3) -> bool {
-        let mut moving: Vec<(Pose3, &dyn Shape)> = shape
+        let mut moving: Vec<(Pose3, &Cuboid)> = shape
             .open_finger_poses()
             .into_iter()
-            .map(|local| (*world_from_pregrasp * local, &shape.finger as &dyn Shape))
+            .map(|local| (*world_from_pregrasp * local, &shape.finger))
             .collect();
         moving.push((
             *world_from_pregrasp * Pose3::from_translation(shape.palm_center),
-            &shape.palm as &dyn Shape,
+            &shape.palm,
         ));
-        let object = (self.world_from_object(), &*self.object_shape);
+        let world_from_object = self.world_from_object();
         let table = self
             .world
             .colliders
             .get(self.table)
             .map(|c| (*c.position(), c.shape()));
-        table.into_iter().chain([object]).any(|(pose, fixed)| {
-            moving
-                .iter()
-                .any(|(start, shape)| path_touches(start, motion, *shape, &pose, fixed))
+        moving.iter().any(|(start, cuboid)| {
+            let to_object = |pose: &Pose3| {
+                Some(cuboid_mesh_gap(
+                    cuboid,
+                    pose,
+                    &self.object_surface,
+                    &world_from_object,
+                    SWEEP_REACH_M,
+                ))
+            };
+            let to_table = |pose: &Pose3| {
+                table.and_then(|(table_pose, table_shape)| {
+                    exact_distance(pose, *cuboid, &table_pose, table_shape)
+                })
+            };
+            path_touches(start, motion, to_object) || path_touches(start, motion, to_table)
         })
     }
 }
@@ -494,25 +510,23 @@ impl Scene {
 /// How close the sweep may come to an obstacle before it counts as touching it, metres.
 pub(crate) const SWEEP_TOUCH_M: f32 = 1.0e-4;
 
+/// How far the sweep looks for the object's triangles around the hand at each step, metres
+/// (a step is at most this long).
+const SWEEP_REACH_M: f32 = 0.02;
+
 /// The most distance queries one shape's sweep may take; beyond, it counts as touching (a path
 /// grazing an obstacle at just over [`SWEEP_TOUCH_M`] for its whole length).
 const MAX_SWEEP_QUERIES: usize = 4096;
 
-/// Whether `moving`, translated from `start` by `motion`, comes within [`SWEEP_TOUCH_M`] of
-/// `fixed` at `fixed_pose`. A pair parry cannot measure counts as touching: a grasp is never
-/// passed unchecked.
-fn path_touches(
-    start: &Pose3,
-    motion: Vec3,
-    moving: &dyn Shape,
-    fixed_pose: &Pose3,
-    fixed: &dyn Shape,
-) -> bool {
+/// Whether a shape translated from `start` by `motion` comes within [`SWEEP_TOUCH_M`] of an
+/// obstacle, `distance` giving a lower bound on its distance at a pose (`None`: it cannot be
+/// measured, which counts as touching: a grasp is never passed unchecked).
+fn path_touches(start: &Pose3, motion: Vec3, distance: impl Fn(&Pose3) -> Option<f32>) -> bool {
     let length = motion.length();
     let mut t = 0.0f32;
     for _ in 0..MAX_SWEEP_QUERIES {
         let pose = Pose3::from_parts(start.translation + motion * t, start.rotation);
-        let Some(d) = exact_distance(&pose, moving, fixed_pose, fixed) else {
+        let Some(d) = distance(&pose) else {
             return true;
         };
         if d <= SWEEP_TOUCH_M {

@@ -110,6 +110,11 @@ pub(crate) struct SignedMesh {
 }
 
 impl SignedMesh {
+    /// The mesh as parry's triangle mesh.
+    pub fn into_trimesh(self) -> TriMesh {
+        self.trimesh
+    }
+
     pub fn new(mesh: &TriangleMesh) -> Result<Self> {
         let sign = if signed_volume(mesh) < 0.0 { -1.0 } else { 1.0 };
         let trimesh = TriMesh::with_flags(
