@@ -9,15 +9,14 @@
 
 mod common;
 
-use common::REAL_MESHES;
-use std::path::PathBuf;
+use common::{EvalArgs, REAL_MESHES, Rested, analyse_at_rest};
 use std::process::ExitCode;
 use std::time::Instant;
 
 use clap::Parser;
-use mvgrasp::geometry::{RestingPoses, load_mesh};
+use mvgrasp::geometry::load_mesh;
 use mvgrasp::grasp::physics::{PhysicsParams, StageCounts};
-use mvgrasp::grasp::{AnalysisConfig, GraspObject, Gripper, analyse};
+use mvgrasp::grasp::{AnalysisConfig, Gripper};
 use serde::Serialize;
 
 /// Evaluate robust labels against physics on real meshes.
@@ -26,15 +25,8 @@ struct Args {
     /// Grasps sampled per object.
     #[arg(long, default_value_t = 100)]
     n: usize,
-    /// Seed of sampling, quality and physics.
-    #[arg(long, default_value_t = 0)]
-    seed: u64,
-    /// The shared mesh folder.
-    #[arg(long, default_value = "../shared/data/meshes")]
-    data: PathBuf,
-    /// Write every object's row as JSON here.
-    #[arg(long)]
-    json: Option<PathBuf>,
+    #[command(flatten)]
+    eval: EvalArgs,
 }
 
 /// One object's figures.
@@ -73,29 +65,21 @@ fn run(args: &Args) -> Result<(), String> {
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for relative in REAL_MESHES {
-        let path = args.data.join(relative);
+        let path = args.eval.data.join(relative);
         if !path.exists() {
             eprintln!("skipping {} (not found)", path.display());
             continue;
         }
         let started = Instant::now();
         let mesh = load_mesh(&path).map_err(|e| e.to_string())?;
-        let rest = RestingPoses::of(&mesh).map_err(|e| e.to_string())?;
-        // Grasps are judged on objects that rest steadily: one that only rolls is left out.
-        if rest.only_marginal() {
-            eprintln!("skipping {relative}: every stable pose is marginal");
+        let Some(Rested {
+            pose_index,
+            analysis,
+            ..
+        }) = analyse_at_rest(relative, mesh, &gripper, &config, args.eval.seed)?
+        else {
             continue;
-        }
-        let (pose_index, pose) = rest.get(0).map_err(|e| e.to_string())?;
-        let object = GraspObject::new(mesh).map_err(|e| e.to_string())?;
-        let analysis = analyse(
-            &object,
-            &pose.table_from_object,
-            &gripper,
-            &config,
-            args.seed,
-        )
-        .map_err(|e| format!("{relative}: {e}"))?;
+        };
         let mut row = Row {
             object: relative.rsplit('/').next().unwrap_or(relative).to_string(),
             stable_pose: pose_index,
@@ -136,7 +120,7 @@ fn run(args: &Args) -> Result<(), String> {
         total.seconds += row.seconds;
     }
     print_row(&total);
-    if let Some(path) = &args.json {
+    if let Some(path) = &args.eval.json {
         let json = serde_json::to_string_pretty(&rows).map_err(|e| e.to_string())?;
         std::fs::write(path, json).map_err(|e| format!("{}: {e}", path.display()))?;
     }

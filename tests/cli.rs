@@ -52,7 +52,7 @@ fn plan_json_is_complete_and_deterministic() {
         "--category",
         "box",
         "--index",
-        "2",
+        "0",
         "--model",
         "gqcnn_small_multiview",
         "--views",
@@ -82,6 +82,32 @@ fn plan_json_is_complete_and_deterministic() {
         .map(|p| p["probability"].as_f64().unwrap())
         .sum();
     assert!(sum > 0.9 && sum <= 1.0001, "{sum}");
+}
+
+/// A 17 x 13 cm box lying flat, 3.8 cm tall: too wide for the Panda from above, too low to take
+/// from the side without a finger in the table. The planner returns no grasp and says why.
+#[test]
+fn plan_says_why_it_returns_no_grasp() {
+    let out = plan(&[
+        "--category",
+        "box",
+        "--index",
+        "2",
+        "--model",
+        "gqcnn_small_multiview",
+        "--views",
+        "4",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("no grasp: every candidate was rejected: the open hand meets observed depth"),
+        "{text}"
+    );
 }
 
 #[test]

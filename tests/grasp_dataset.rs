@@ -72,6 +72,57 @@ fn matrix(values: &[f32], i: usize) -> [[f32; 4]; 4] {
     [0, 1, 2, 3].map(|r| [m[4 * r], m[4 * r + 1], m[4 * r + 2], m[4 * r + 3]])
 }
 
+/// With physics on every collision-free datapoint, each gets a physics label from K perturbed
+/// trials: a rate in steps of 1/K or so (settle failures left out), the label its majority;
+/// datapoints that collide get none.
+#[test]
+fn every_collision_free_datapoint_gets_a_physics_label_from_k_trials() {
+    let Some(renderer) = renderer() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let config = GraspDatasetConfig {
+        grasps_per_pose: 12,
+        views_per_pose: 2,
+        physics_fraction: 1.0,
+        physics_trials: 4,
+        ..small_config()
+    };
+    let summary = generate(
+        &renderer,
+        &sources(&[Category::Box]),
+        &config,
+        dir.path(),
+        false,
+    )
+    .unwrap();
+    let bytes = std::fs::read(dir.path().join("shard_00000.safetensors")).unwrap();
+    let shard = SafeTensors::deserialize(&bytes).unwrap();
+    let rate = f32s(&shard, "physics_rate");
+    let label = shard.tensor("physics").unwrap().data().to_vec();
+    let free = shard.tensor("collision_free").unwrap().data().to_vec();
+    let mut labelled = 0;
+    for ((&r, &l), &f) in rate.iter().zip(&label).zip(&free) {
+        let l = l as i8;
+        if f == 0 {
+            assert_eq!((r, l), (-1.0, -1), "a colliding datapoint gets no trial");
+            continue;
+        }
+        if l < 0 {
+            assert_eq!(r, -1.0, "every trial lost the resting pose");
+            continue;
+        }
+        labelled += 1;
+        assert!((0.0..=1.0).contains(&r), "{r}");
+        // successes over the settled trials, 1 to 4 of them
+        assert!(
+            (1..=4).any(|n| ((r * n as f32).round() - r * n as f32).abs() < 1e-5),
+            "{r}"
+        );
+        assert_eq!(l, i8::from(r >= 0.5));
+    }
+    assert!(labelled > 0, "{summary:?}");
+    assert_eq!(summary.totals.physics_trials, labelled);
+}
+
 #[test]
 fn crops_are_centred_on_the_grasp_with_its_axis_along_the_rows_and_labels_recompute() {
     let Some(renderer) = renderer() else { return };

@@ -182,14 +182,20 @@ fn summary(model: &str, net: &Gqcnn, plan: &PlanReport, distance_m: f32) -> Stri
             v.elevation_deg, v.candidates
         );
     }
+    let r = &plan.rejections;
     let Some(best) = &plan.best else {
-        let _ = writeln!(
-            s,
-            "no grasp: no view had an antipodal candidate the gripper fits"
-        );
+        let why = if r.total() > 0 {
+            format!(
+                "every candidate was rejected: the open hand meets observed depth ({}), contacts \
+                 off the observed surface ({})",
+                r.hand_meets_observed_depth, r.contact_off_surface
+            )
+        } else {
+            "no view had an antipodal candidate the gripper fits".to_string()
+        };
+        let _ = writeln!(s, "no grasp: {why}");
         return s;
     };
-    let r = &plan.rejections;
     if r.total() > 0 {
         let _ = writeln!(
             s,

@@ -38,9 +38,14 @@ pub struct GraspDatasetConfig {
     pub crop: CropParams,
     /// Depth noise (off by default).
     pub noise: NoiseParams,
-    /// Fraction of the collision-free datapoints that also get a rapier trial, chosen by a hash
-    /// of their ids (0 turns physics off).
+    /// Fraction of the collision-free datapoints that also get a physics label, chosen by a
+    /// hash of their ids (0 turns physics off; 1 labels every collision-free datapoint).
     pub physics_fraction: f32,
+    /// Rapier trials per physics label (K), each with the object's placement, the gripper's
+    /// pose and the pads' friction perturbed as robust quality perturbs them
+    /// ([`mvgrasp_grasp::physics::PhysicsNoise::matching`] of `quality`); the label is the
+    /// share that held.
+    pub physics_trials: usize,
     /// Objects per shard (a shard holds whole objects).
     pub objects_per_shard: usize,
     /// Antipodal sampling (friction cone, tries, duplicates, collision margins).
@@ -68,6 +73,7 @@ impl Default for GraspDatasetConfig {
             crop: CropParams::default(),
             noise: NoiseParams::default(),
             physics_fraction: 0.1,
+            physics_trials: 1,
             objects_per_shard: 4,
             sampling: SamplingParams {
                 max_tries: 2000,
@@ -198,6 +204,7 @@ impl GraspDatasetConfig {
             ("grasps_per_pose", self.grasps_per_pose),
             ("views_per_pose", self.views_per_pose),
             ("objects_per_shard", self.objects_per_shard),
+            ("physics_trials", self.physics_trials),
         ] {
             if value == 0 {
                 return bad(key, value, "must be at least 1");

@@ -2,7 +2,9 @@
 //! that render its depth, and the grasps that approach along each view.
 
 use mvgrasp_geometry::{Pose3, RestingPoses, TriangleMesh, Vec3};
-use mvgrasp_grasp::physics::{PhysicsObject, simulate_grasp};
+use mvgrasp_grasp::physics::{
+    FailureStage, PhysicsNoise, PhysicsObject, StageCounts, success_probability,
+};
 use mvgrasp_grasp::quality::{grasp_seed, robust_qualities};
 use mvgrasp_grasp::{
     AntipodalAxis, Grasp, GraspLabel, GraspObject, Gripper, canonical_frame, check_collision,
@@ -42,6 +44,7 @@ const QUALITY: u64 = 2;
 const CAMERA: u64 = 3;
 const NOISE: u64 = 4;
 const PHYSICS: u64 = 5;
+const PHYSICS_NOISE: u64 = 6;
 
 /// The seed of the robust quality of axis `grasp` in pose `pose` (what `quality_seed` records).
 pub(crate) fn quality_seed(object_seed: u64, pose: usize, grasp: usize) -> u64 {
@@ -157,6 +160,7 @@ pub(crate) fn object_datapoints(
                     collision_free: label.collision_free,
                     force_closure: quality.nominal_force_closure,
                     physics: -1,
+                    physics_rate: -1.0,
                     physics_stage: -1,
                     object_id,
                     stable_pose: pose_index as u32,
@@ -182,6 +186,22 @@ pub(crate) fn object_datapoints(
         points.extend(candidates);
     }
     Ok(points)
+}
+
+/// The stage most trials failed at (the earliest of a tie), if any failed.
+fn most_failed_stage(failures: &StageCounts) -> Option<FailureStage> {
+    FailureStage::ALL
+        .into_iter()
+        .map(|stage| (stage, failures.of(stage)))
+        .filter(|&(_, n)| n > 0)
+        .fold(
+            None,
+            |best: Option<(FailureStage, usize)>, (stage, n)| match best {
+                Some((_, m)) if m >= n => best,
+                _ => Some((stage, n)),
+            },
+        )
+        .map(|(stage, _)| stage)
 }
 
 /// The gripper frame (object frame) on `axis` whose approach is the camera's optical axis
@@ -254,7 +274,8 @@ fn run_physics(
         })
         .map(|(i, _)| i)
         .collect();
-    let outcomes = chosen
+    let noise = PhysicsNoise::matching(&config.quality);
+    let estimates = chosen
         .par_iter()
         .map(|&i| {
             let p = &points[i];
@@ -263,18 +284,31 @@ fn run_physics(
                 world_from_gripper: *table_from_object * object_from_gripper,
                 width_m: p.width_m,
             };
-            simulate_grasp(
+            let seed = seed_of(
+                object_seed,
+                PHYSICS_NOISE,
+                u64::from(p.stable_pose) << 32 | u64::from(p.view),
+                u64::from(p.grasp),
+            );
+            success_probability(
                 physics_object,
                 table_from_object,
                 &grasp,
                 &resolved.gripper,
                 &config.physics,
+                &noise,
+                config.physics_trials,
+                seed,
             )
         })
         .collect::<std::result::Result<Vec<_>, _>>()?;
-    for (&i, outcome) in chosen.iter().zip(outcomes) {
-        points[i].physics = i8::from(outcome.success);
-        points[i].physics_stage = outcome.failed_at.map_or(-1, |stage| stage as i8);
+    for (&i, estimate) in chosen.iter().zip(estimates) {
+        // Trials whose object left its resting pose before the gripper came judge the shape,
+        // not the grasp (see `SuccessEstimate::settled_rate`).
+        let rate = estimate.settled_rate();
+        points[i].physics_rate = rate.map_or(-1.0, |r| r as f32);
+        points[i].physics = rate.map_or(-1, |r| i8::from(r >= 0.5));
+        points[i].physics_stage = most_failed_stage(&estimate.failures).map_or(-1, |s| s as i8);
     }
     Ok(())
 }

@@ -15,8 +15,9 @@
 //! | `robust_label` | U8 | N | Dex-Net 2.0's label: robust_epsilon > threshold and collision-free |
 //! | `collision_free` | U8 | N | the open hand misses object and table along its approach |
 //! | `force_closure` | U8 | N | the nominal contacts are in force closure |
-//! | `physics` | I8 | N | rapier trial: 1 held, 0 failed, -1 not run |
-//! | `physics_stage` | I8 | N | stage a trial failed at: 0 settle, 1 approach, 2 close, 3 lift, 4 shake; -1 none |
+//! | `physics` | I8 | N | physics label: 1 when at least half the trials held, 0 when not, -1 not run (or every trial's object left its resting pose) |
+//! | `physics_rate` | F32 | N | share of the label's perturbed trials that held, of those whose object kept its resting pose until the gripper came; -1 as `physics` |
+//! | `physics_stage` | I8 | N | stage most failed trials failed at: 0 settle, 1 approach, 2 close, 3 lift, 4 shake; -1 none |
 //! | `object_id` `stable_pose` `view` `grasp` | U32 | N | ids (object index in the manifest; pose, view, axis within it) |
 //! | `quality_seed` | U64 | N | seed of the robust-quality evaluation (see the manifest) |
 //! | `object_from_gripper` | F32 | N x 4 x 4 | the grasp in the object frame (approach along the view) |
@@ -57,6 +58,8 @@ pub struct Datapoint {
     pub force_closure: bool,
     /// See the module docs.
     pub physics: i8,
+    /// See the module docs.
+    pub physics_rate: f32,
     /// See the module docs.
     pub physics_stage: i8,
     /// See the module docs.
@@ -107,15 +110,16 @@ pub struct Counts {
     pub positives: usize,
     /// Collision-free datapoints.
     pub collision_free: usize,
-    /// Rapier trials run.
+    /// Datapoints with a physics label (each from `physics_trials` trials of the config).
     pub physics_trials: usize,
-    /// Trials that held the object.
+    /// Physics labels 1 (at least half the trials held).
     pub physics_held: usize,
-    /// Trials that got as far as the grasp (the object did not topple while settling).
+    /// Physics labels whose trials mostly got as far as the grasp (the object did not topple
+    /// while settling).
     pub physics_tested: usize,
-    /// Of those, trials whose outcome matched the robust label.
+    /// Of those, labels that matched the robust label.
     pub physics_agree: usize,
-    /// Failed trials by stage.
+    /// Physics labels 0 by the stage most of their trials failed at.
     pub physics_failures: StageCounts,
 }
 
@@ -135,7 +139,9 @@ impl Counts {
             counts.physics_trials += 1;
             counts.physics_held += usize::from(p.physics == 1);
             let stage = FailureStage::ALL.get(p.physics_stage as usize).copied();
-            if let Some(stage) = stage {
+            if let Some(stage) = stage
+                && p.physics == 0
+            {
                 counts.physics_failures.count(stage);
             }
             // A trial whose object toppled before the gripper came tested the pose, not the
@@ -271,6 +277,12 @@ pub fn write_shard(
                 .iter()
                 .flat_map(|p| p.physics.to_le_bytes())
                 .collect(),
+        ),
+        (
+            "physics_rate",
+            Dtype::F32,
+            vec![n],
+            bytes_f32(points.iter().map(|p| p.physics_rate)),
         ),
         (
             "object_id",

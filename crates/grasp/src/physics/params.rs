@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{GraspError, Result};
 use crate::object::DEFAULT_DENSITY_KG_M3;
+use crate::quality::RobustQualityParams;
 
 /// How a grasp is simulated and judged (see [`crate::physics`] for the phases).
 ///
@@ -233,8 +234,9 @@ impl PhysicsParams {
 }
 
 /// Pose noise for [`crate::physics::success_probability`]: each trial draws independent normal
-/// perturbations of the gripper's pose (in its own frame, about the grasp centre) and of the
-/// object's placement on the table (in the table plane, about its centre of mass).
+/// perturbations of the gripper's pose (in its own frame, about the grasp centre), of the
+/// object's placement on the table (in the table plane, about its centre of mass) and of the
+/// pads' friction coefficient.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct PhysicsNoise {
@@ -246,16 +248,23 @@ pub struct PhysicsNoise {
     pub object_translation_sigma_m: f32,
     /// Standard deviation of the object's turn about the vertical, radians.
     pub object_yaw_sigma_rad: f32,
+    /// Standard deviation of the pads' friction coefficient about the gripper's `pad_friction`.
+    pub friction_sigma: f32,
+    /// Floor of the drawn friction coefficient.
+    pub friction_min: f32,
 }
 
 impl Default for PhysicsNoise {
-    /// 5 mm and 0.05 rad (about 3 degrees) for the gripper, 5 mm and 0.05 rad for the object.
+    /// 5 mm and 0.05 rad (about 3 degrees) for the gripper, 5 mm and 0.05 rad for the object,
+    /// the friction unperturbed.
     fn default() -> Self {
         Self {
             gripper_translation_sigma_m: 0.005,
             gripper_rotation_sigma_rad: 0.05,
             object_translation_sigma_m: 0.005,
             object_yaw_sigma_rad: 0.05,
+            friction_sigma: 0.0,
+            friction_min: 0.01,
         }
     }
 }
@@ -267,7 +276,25 @@ impl PhysicsNoise {
         gripper_rotation_sigma_rad: 0.0,
         object_translation_sigma_m: 0.0,
         object_yaw_sigma_rad: 0.0,
+        friction_sigma: 0.0,
+        friction_min: 0.01,
     };
+
+    /// The perturbations robust Ferrari-Canny quality samples (Dex-Net 2.0's), as far as a
+    /// trial on a table can take them: the gripper's translation and rotation and the friction
+    /// coefficient's deviation and floor as they are; the object's translation in the table
+    /// plane only and its rotation about the vertical only (a tilt or a lift off the table
+    /// would settle back).
+    pub fn matching(robust: &RobustQualityParams) -> Self {
+        Self {
+            gripper_translation_sigma_m: robust.gripper_translation_sigma_m,
+            gripper_rotation_sigma_rad: robust.gripper_rotation_sigma_rad,
+            object_translation_sigma_m: robust.object_translation_sigma_m,
+            object_yaw_sigma_rad: robust.object_rotation_sigma_rad,
+            friction_sigma: robust.friction_coef_sigma,
+            friction_min: robust.friction_coef_min,
+        }
+    }
 
     /// Checks that every deviation is finite and not negative.
     ///
@@ -288,6 +315,8 @@ impl PhysicsNoise {
                 self.object_translation_sigma_m,
             ),
             ("object_yaw_sigma_rad", self.object_yaw_sigma_rad),
+            ("friction_sigma", self.friction_sigma),
+            ("friction_min", self.friction_min),
         ] {
             if !(value.is_finite() && value >= 0.0) {
                 return Err(GraspError::InvalidParameter {
@@ -349,5 +378,18 @@ mod tests {
         assert_eq!(partial.timestep_s, PhysicsParams::default().timestep_s);
         let noise: PhysicsNoise = serde_json::from_str("{}").unwrap();
         assert_eq!(noise, PhysicsNoise::default());
+    }
+
+    #[test]
+    fn the_matching_noise_is_robust_qualitys() {
+        let robust = RobustQualityParams::default();
+        let noise = PhysicsNoise::matching(&robust);
+        noise.validate().unwrap();
+        assert_eq!(noise.gripper_translation_sigma_m, 0.005);
+        assert_eq!(noise.gripper_rotation_sigma_rad, 0.001);
+        assert_eq!(noise.object_translation_sigma_m, 0.01);
+        assert_eq!(noise.object_yaw_sigma_rad, 0.01);
+        assert_eq!(noise.friction_sigma, 0.1);
+        assert_eq!(noise.friction_min, 0.01);
     }
 }

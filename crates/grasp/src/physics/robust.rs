@@ -28,6 +28,16 @@ pub struct SuccessEstimate {
     pub failures: StageCounts,
 }
 
+impl SuccessEstimate {
+    /// The share of the trials whose object stayed in its pose until the gripper came (no
+    /// [`FailureStage::Settle`]) that held: what the grasp is worth, apart from a resting pose
+    /// the trial's shape does not keep. `None` when no trial got that far.
+    pub fn settled_rate(&self) -> Option<f64> {
+        let settled = self.trials - self.failures.settle;
+        (settled > 0).then(|| self.successes as f64 / settled as f64)
+    }
+}
+
 /// Failed trials counted by [`FailureStage`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct StageCounts {
@@ -44,6 +54,17 @@ pub struct StageCounts {
 }
 
 impl StageCounts {
+    /// The failures at `stage`.
+    pub fn of(&self, stage: FailureStage) -> usize {
+        match stage {
+            FailureStage::Settle => self.settle,
+            FailureStage::Approach => self.approach,
+            FailureStage::Close => self.close,
+            FailureStage::Lift => self.lift,
+            FailureStage::Shake => self.shake,
+        }
+    }
+
     /// Counts one failure at `stage`.
     pub fn count(&mut self, stage: FailureStage) {
         let slot = match stage {
@@ -68,7 +89,8 @@ impl std::ops::AddAssign for StageCounts {
 }
 
 /// Runs `n_trials` of [`simulate_grasp`], each with the gripper and the object's placement
-/// perturbed by `noise`, and returns the fraction that succeed.
+/// perturbed by `noise` (and the pads' friction drawn about the gripper's), and returns the
+/// fraction that succeed.
 ///
 /// Trial `i` draws its noise from ChaCha8 seeded with `seed` on stream `i`, so the estimate is
 /// the same for any thread count (trials run in parallel on rayon's pool). The gripper's
@@ -107,8 +129,19 @@ pub fn success_probability(
         .map(|i| {
             let mut rng = ChaCha8Rng::seed_from_u64(seed);
             rng.set_stream(i as u64);
-            let (placed, perturbed) = perturb(noise, table_from_object, com, grasp, &mut rng);
-            simulate_grasp(object, &placed, &perturbed, gripper, params)
+            let (placed, perturbed, friction) = perturb(
+                noise,
+                table_from_object,
+                com,
+                grasp,
+                gripper.pad_friction,
+                &mut rng,
+            );
+            let hand = Gripper {
+                pad_friction: friction,
+                ..gripper.clone()
+            };
+            simulate_grasp(object, &placed, &perturbed, &hand, params)
         })
         .collect();
     let mut estimate = SuccessEstimate {
@@ -127,19 +160,21 @@ pub fn success_probability(
     Ok(estimate)
 }
 
-/// One trial's object placement and grasp under `noise`.
+/// One trial's object placement, grasp and pad friction under `noise`.
 fn perturb(
     noise: &PhysicsNoise,
     table_from_object: &Pose3,
     com: Vec3,
     grasp: &Grasp,
+    friction: f32,
     rng: &mut ChaCha8Rng,
-) -> (Pose3, Grasp) {
+) -> (Pose3, Grasp, f32) {
     let mut normal = || -> f32 { StandardNormal.sample(rng) };
     let shift = Vec3::new(normal(), normal(), 0.0) * noise.object_translation_sigma_m;
     let yaw = normal() * noise.object_yaw_sigma_rad;
     let gripper_shift = Vec3::new(normal(), normal(), normal()) * noise.gripper_translation_sigma_m;
     let gripper_turn = Vec3::new(normal(), normal(), normal()) * noise.gripper_rotation_sigma_rad;
+    let friction = (friction + normal() * noise.friction_sigma).max(noise.friction_min);
 
     // Turn about the vertical through the centre of mass, then shift in the table plane.
     let table_motion = Pose3::from_translation(com + shift)
@@ -150,5 +185,35 @@ fn perturb(
         world_from_gripper: grasp.world_from_gripper * gripper_motion,
         width_m: grasp.width_m,
     };
-    (table_motion * *table_from_object, perturbed)
+    (table_motion * *table_from_object, perturbed, friction)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_settled_rate_leaves_out_trials_that_lost_the_pose() {
+        let estimate = SuccessEstimate {
+            probability: 0.3,
+            trials: 10,
+            successes: 3,
+            failures: StageCounts {
+                settle: 4,
+                approach: 3,
+                ..StageCounts::default()
+            },
+        };
+        assert_eq!(estimate.settled_rate(), Some(0.5));
+        let lost = SuccessEstimate {
+            probability: 0.0,
+            trials: 2,
+            successes: 0,
+            failures: StageCounts {
+                settle: 2,
+                ..StageCounts::default()
+            },
+        };
+        assert_eq!(lost.settled_rate(), None);
+    }
 }
