@@ -5,7 +5,8 @@
 //!
 //! ```text
 //! cargo run --release --example plan_eval -- [--per-category 2] [--data ../shared/data/meshes]
-//!     [--camera phoxi_s|primesense|realsense_d435] [--top-down-only] [--shell]
+//!     [--camera phoxi_s|primesense|realsense_d435] [--top-down-only] [--shell] [--top10]
+//!     [--gqcnn EXPORT.json]
 //! ```
 //!
 //! `--camera` renders every view with another camera's intrinsics: the planner scales its
@@ -24,8 +25,10 @@ use std::process::ExitCode;
 use clap::Parser;
 use mvgrasp::geometry::objects::{Category, generate};
 use mvgrasp::geometry::{Intrinsics, IntrinsicsPreset, TriangleMesh, load_mesh};
+use mvgrasp::grasp::GraspObject;
 use mvgrasp::grasp::physics::FailureStage;
-use mvgrasp::planner::{GqcnnPolicy, PlanParams, ShippedModel, models, plan_grasp};
+use mvgrasp::infer::Gqcnn;
+use mvgrasp::planner::{GqcnnPolicy, PlanParams, ShippedModel, check_grasp, models, plan_grasp};
 use mvgrasp::render::{Backend, Renderer};
 
 /// Plan with each policy on unseen objects; check the chosen grasps in physics.
@@ -60,6 +63,13 @@ struct Args {
     /// 1 mm) instead of the hull or VHACD's parts.
     #[arg(long)]
     shell: bool,
+    /// Also try the planner's next choices in physics: the precision of its top 10 (the best
+    /// ten candidates that pass the hand check), per object.
+    #[arg(long)]
+    top10: bool,
+    /// The top-down GQ-CNN's network from this export (`NAME.json`) instead of the shipped one.
+    #[arg(long)]
+    gqcnn: Option<PathBuf>,
 }
 
 #[derive(Default)]
@@ -72,6 +82,8 @@ struct Tally {
     tried: usize,
     held: usize,
     seconds: f64,
+    /// With --top10: per object, the share of its top choices (up to 10) that held.
+    top10: Vec<f64>,
 }
 
 fn main() -> ExitCode {
@@ -133,7 +145,10 @@ fn run(args: &Args) -> Result<(), String> {
             params.labels.physics_shape.shell = args.shell;
             params.views.radius_m = *radius_m;
             let gripper = params.labels.gripper().map_err(|e| e.to_string())?;
-            let net = model.load().map_err(|e| e.to_string())?;
+            let net = match (&args.gqcnn, model.name == models::GQCNN_TOPDOWN.name) {
+                (Some(path), true) => Gqcnn::load(path).map_err(|e| e.to_string())?,
+                _ => model.load().map_err(|e| e.to_string())?,
+            };
             let mut policy =
                 GqcnnPolicy::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
             if args.unscaled_crops {
@@ -170,8 +185,35 @@ fn run(args: &Args) -> Result<(), String> {
                     None => "held".into(),
                     Some(stage) => format!("{stage:?}"),
                 });
+            let top10 = if args.top10 {
+                let object = GraspObject::new(mesh.clone()).map_err(|e| e.to_string())?;
+                let mut held = 0;
+                let mut tried = 0;
+                for choice in &report.top {
+                    let label = check_grasp(
+                        &object,
+                        &report.table_from_object,
+                        choice,
+                        &gripper,
+                        &params,
+                    )
+                    .map_err(|e| e.to_string())?;
+                    if let Some(p) = label.physics
+                        && p.failed_at != Some(FailureStage::Settle)
+                    {
+                        tried += 1;
+                        held += usize::from(p.success);
+                    }
+                }
+                if tried > 0 {
+                    tally.top10.push(held as f64 / tried as f64);
+                }
+                format!("  top {}: {held} held", tried)
+            } else {
+                String::new()
+            };
             println!(
-                "{name:<30} {label:<22} {:>7.3}  {:>4}  {:>6}  {physics}",
+                "{name:<30} {label:<22} {:>7.3}  {:>4}  {:>6}  {physics}{top10}",
                 best.quality,
                 if free { "yes" } else { "no" },
                 if robust { "yes" } else { "no" }
@@ -194,6 +236,17 @@ fn run(args: &Args) -> Result<(), String> {
             t.tried,
             t.seconds / objects.len().max(1) as f64
         );
+    }
+    if args.top10 {
+        println!("\nprecision of the top choices (up to 10 per object, mean over objects)");
+        for ((label, ..), t) in policies.iter().zip(&tallies) {
+            let mean = t.top10.iter().sum::<f64>() / t.top10.len().max(1) as f64;
+            println!(
+                "{label:<22} {:>5.0}% over {} objects",
+                100.0 * mean,
+                t.top10.len()
+            );
+        }
     }
     Ok(())
 }

@@ -357,6 +357,15 @@ mod tests {
             },
             topdown
         );
+        let physics = GraspDatasetConfig::from_file(&dir.join("topdown_physics.toml")).unwrap();
+        assert_eq!(
+            physics,
+            GraspDatasetConfig {
+                physics_fraction: 1.0,
+                physics_trials: 10,
+                ..topdown
+            }
+        );
     }
 
     #[test]

@@ -68,6 +68,9 @@ def _checked(check: _Check, **kwargs: Any) -> Any:
     return field(metadata={"check": check}, **kwargs)
 
 
+LABELS = ("robust", "physics", "both")
+"""The training labels a grasp dataset offers (see :class:`DataConfig`)."""
+
 _AT_LEAST_ONE: _Check = (lambda v: v >= 1, ">= 1")
 _NON_NEGATIVE: _Check = (lambda v: v >= 0, ">= 0")
 _POSITIVE: _Check = (lambda v: v > 0, "> 0")
@@ -96,6 +99,13 @@ class DataConfig(_Validated):
     """The dataset folder; relative paths are relative to the config file's folder."""
     val_fraction: float = _checked(_FRACTION)
     """The fraction of objects held out for validation (split by object, never by image)."""
+    label: str = _checked(
+        (lambda v: v in LABELS, f"one of {', '.join(LABELS)}"), default="robust"
+    )
+    """What the network learns to predict: ``robust``, Dex-Net 2.0's robust Ferrari-Canny label
+    (the paper's); ``physics``, the physics label (the majority of the datapoint's perturbed
+    rapier trials held; a datapoint that collides is a negative, one without trials is left
+    out); ``both``, the two together."""
 
 
 @dataclass(frozen=True)

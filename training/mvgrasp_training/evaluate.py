@@ -3,7 +3,7 @@
     python -m mvgrasp_training.evaluate MODEL.json DATASET [DATASET ...] [--held-out F --seed S]
 
 Prints, per dataset, the balanced accuracy, accuracy, precision and recall of the robust label
-at 0.5 as JSON, and precision and recall at the stricter thresholds a planner that takes only
+(or with ``--label`` the physics label or both) at 0.5 as JSON, and precision and recall at the stricter thresholds a planner that takes only
 confident grasps uses (0.8, 0.9). With ``--held-out F --seed S`` only the objects a training
 config with ``val_fraction = F`` and ``seed = S`` holds out are scored (the validation objects of
 that run: a network trained with that config never saw them). The network takes what its pose stream takes from each datapoint: the grasp
@@ -18,6 +18,7 @@ import json
 from pathlib import Path
 from typing import Any
 
+from mvgrasp_training.config import LABELS
 from mvgrasp_training.export import load_gqcnn
 from mvgrasp_training.train import load_arrays, metrics, predict, split_by_object
 
@@ -26,13 +27,15 @@ def evaluate(
     model: str | Path,
     datasets: list[str | Path],
     held_out: tuple[float, int] | None = None,
+    label: str = "robust",
 ) -> dict[str, dict[str, Any]]:
-    """The metrics of the export at ``model`` on each dataset, keyed by the dataset's path;
-    ``held_out = (val_fraction, seed)`` scores only the objects such a split holds out."""
+    """The metrics of the export at ``model`` on each dataset against ``label`` (see
+    ``DataConfig.label``), keyed by the dataset's path; ``held_out = (val_fraction, seed)``
+    scores only the objects such a split holds out."""
     net, _ = load_gqcnn(model)
     results = {}
     for root in datasets:
-        data = load_arrays(Path(root), net.arch.pose_inputs)
+        data = load_arrays(Path(root), net.arch.pose_inputs, label)
         if held_out is not None:
             data = split_by_object(data, *held_out)[1]
         prob = predict(net, data)
@@ -54,9 +57,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("datasets", type=Path, nargs="+", help="grasp_dataset output folders")
     parser.add_argument("--held-out", type=float, help="score only this split's held-out objects")
     parser.add_argument("--seed", type=int, default=0, help="the split's seed (with --held-out)")
+    parser.add_argument("--label", choices=LABELS, default="robust", help="the label scored against")
     args = parser.parse_args(argv)
     held_out = None if args.held_out is None else (args.held_out, args.seed)
-    print(json.dumps(evaluate(args.model, args.datasets, held_out), indent=2))
+    print(json.dumps(evaluate(args.model, args.datasets, held_out, args.label), indent=2))
     return 0
 
 

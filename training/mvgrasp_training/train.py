@@ -62,20 +62,39 @@ class Arrays:
         return len(self.label)
 
 
-def load_arrays(root: Path, pose_inputs: int) -> Arrays:
-    """Every datapoint of the dataset at ``root``."""
+def shard_labels(shard: dict[str, np.ndarray], label: str, where: str) -> np.ndarray:
+    """A shard's training labels (see ``DataConfig.label``) as int64, -1 where a datapoint has
+    none (collision-free but without physics trials)."""
+    robust = np.asarray(shard["robust_label"], dtype=np.int64)
+    if label == "robust":
+        return robust
+    if "physics" not in shard:
+        raise ValueError(f"{where}: the dataset has no physics labels (made before them)")
+    physics = np.asarray(shard["physics"], dtype=np.int64)
+    free = np.asarray(shard["collision_free"], dtype=bool)
+    # A colliding approach fails the trial's approach: a physics negative.
+    physics = np.where(free, physics, 0)
+    if label == "physics":
+        return physics
+    return np.where(physics < 0, -1, robust & physics)
+
+
+def load_arrays(root: Path, pose_inputs: int, label: str = "robust") -> Arrays:
+    """Every datapoint of the dataset at ``root`` that has the ``label`` asked for."""
     parts: dict[str, list[np.ndarray]] = {"depth": [], "pose": [], "label": [], "object_id": []}
     for shard in GraspDataset.open(root).shards():
         n = len(shard["robust_label"])
         if n == 0:
             continue
-        parts["depth"].append(np.asarray(shard["depth_crops"], dtype=np.float32)[:, None])
+        labels = shard_labels(shard, label, str(root))
+        keep = labels >= 0
+        parts["depth"].append(np.asarray(shard["depth_crops"], dtype=np.float32)[keep, None])
         pose = [shard["grasp_depth_m"]] + ([shard["theta_rad"]] if pose_inputs == 2 else [])
-        parts["pose"].append(np.stack(pose, axis=1).astype(np.float32))
-        parts["label"].append(np.asarray(shard["robust_label"], dtype=np.int64))
-        parts["object_id"].append(np.asarray(shard["object_id"], dtype=np.int64))
-    if not parts["label"]:
-        raise ValueError(f"{root}: the dataset has no datapoints")
+        parts["pose"].append(np.stack(pose, axis=1).astype(np.float32)[keep])
+        parts["label"].append(labels[keep])
+        parts["object_id"].append(np.asarray(shard["object_id"], dtype=np.int64)[keep])
+    if not parts["label"] or sum(len(x) for x in parts["label"]) == 0:
+        raise ValueError(f"{root}: the dataset has no datapoints with {label} labels")
     return Arrays(*(np.concatenate(parts[k]) for k in ("depth", "pose", "label", "object_id")))
 
 
@@ -213,7 +232,7 @@ def _train(
         torch.set_num_threads(config.train.threads)
     torch.manual_seed(config.seed)
     pose_inputs = config.model.pose_inputs
-    data = load_arrays(config.data.dataset_dir, pose_inputs)
+    data = load_arrays(config.data.dataset_dir, pose_inputs, config.data.label)
     train_set, val_set = split_by_object(data, config.data.val_fraction, config.seed)
     net = GQCNN(ARCHITECTURES[config.model.architecture](pose_inputs=pose_inputs))
     seen = train_set.depth[train_set.depth > 0]
@@ -326,7 +345,7 @@ def _train(
     report["val"] = metrics(predict(net, val_set), val_set.label)
     report["history"] = history
     if test_dir is not None:
-        test = load_arrays(test_dir, pose_inputs)
+        test = load_arrays(test_dir, pose_inputs, config.data.label)
         report["test"] = metrics(predict(net, test), test.label)
         report["test_dataset"] = dataset_record(test_dir)
     (out / "history.json").write_text(json.dumps(history, indent=2) + "\n")

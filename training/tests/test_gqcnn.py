@@ -107,7 +107,7 @@ def test_evaluate_scores_an_export_on_a_dataset(tmp_path, monkeypatch) -> None:
         label=rng.integers(0, 2, 50),
         object_id=np.zeros(50, dtype=np.int64),
     )
-    monkeypatch.setattr(evaluate, "load_arrays", lambda root, pose_inputs: data)
+    monkeypatch.setattr(evaluate, "load_arrays", lambda root, pose_inputs, label: data)
     result = evaluate.evaluate(path, [tmp_path / "data"])[str(tmp_path / "data")]
     with torch.no_grad():
         prob = torch.softmax(net(torch.from_numpy(data.depth), torch.from_numpy(data.pose)), 1)[:, 1]

@@ -19,6 +19,7 @@ from mvgrasp_training.gqcnn import GQCNN, small  # noqa: E402
 from mvgrasp_training.train import (  # noqa: E402
     load_arrays,
     metrics,
+    shard_labels,
     predict,
     split_by_object,
     train,
@@ -132,3 +133,18 @@ def test_two_processes_with_ddp_train_the_network_one_process_trains(
     # Both runs trained: every parameter moved, by a few Adam steps of 1e-3.
     assert all(moved[n] > 0 for n in one if n.endswith(("weight", "bias")))
     assert moved["convs.0.weight"] > 1e-3
+
+
+def test_the_physics_and_combined_labels_follow_the_trials() -> None:
+    shard = {
+        "robust_label": np.array([1, 1, 0, 0, 1], dtype=np.uint8),
+        "collision_free": np.array([1, 1, 1, 0, 1], dtype=np.uint8),
+        "physics": np.array([1, 0, 1, -1, -1], dtype=np.int8),
+    }
+    assert shard_labels(shard, "robust", "d").tolist() == [1, 1, 0, 0, 1]
+    # A colliding datapoint is a physics negative; a free one without trials has no label.
+    assert shard_labels(shard, "physics", "d").tolist() == [1, 0, 1, 0, -1]
+    assert shard_labels(shard, "both", "d").tolist() == [1, 0, 0, 0, -1]
+    old = {k: v for k, v in shard.items() if k != "physics"}
+    with pytest.raises(ValueError, match="d: the dataset has no physics labels"):
+        shard_labels(old, "physics", "d")
