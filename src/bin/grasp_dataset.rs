@@ -109,12 +109,14 @@ fn run(args: &Args) -> Result<(), String> {
         }
     };
     println!(
-        "{} datapoints ({:.1}% positive, {:.1}% collision-free), {} physics trials ({:.1}% held, \
-         {:.1}% of the {} that reached the grasp agree with the robust label), {:.1} s: {}",
+        "{} datapoints ({:.1}% positive, {:.1}% collision-free), {} physics labels of {} trials \
+         each ({:.1}% held, {:.1}% of the {} that reached the grasp agree with the robust label), \
+         {:.1} s: {}",
         totals.datapoints,
         rate(totals.positives, totals.datapoints),
         rate(totals.collision_free, totals.datapoints),
         totals.physics_trials,
+        config.physics_trials,
         rate(totals.physics_held, totals.physics_trials),
         rate(totals.physics_agree, totals.physics_tested),
         totals.physics_tested,
