@@ -28,10 +28,11 @@ use crate::error::{GraspError, Result};
 pub struct ShapeParams {
     /// Shape a non-convex object as a shell of slabs along its surface (within `tolerance_m`);
     /// when false (the default) as VHACD's convex parts, which bulge a few millimetres past the
-    /// surface. Off by default: parry 0.31's GJK reads a box millimetres beside a thin slab as
-    /// touching it; the trial's approach sweep now backs it with separating axes
-    /// ([`crate::separation`]), but rapier's contacts come from the same GJK, and with the shell
-    /// the planner's collision-free choices held less often (see the README's physics section).
+    /// surface. Off by default: the fingers pass through the shell (side grasps on a 6.8 cm
+    /// can end with the fingers 0 to 3 cm apart, whatever the slabs' thickness): rapier's
+    /// contacts with thin convex parts come from parry 0.31's GJK, which misreads them (the
+    /// trial's approach backs it with separating axes, [`crate::separation`]; the contacts
+    /// cannot be). See the README's physics section.
     pub shell: bool,
     /// No part may stand further than this outside the mesh, metres.
     pub tolerance_m: f32,
