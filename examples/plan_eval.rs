@@ -5,7 +5,7 @@
 //!
 //! ```text
 //! cargo run --release --example plan_eval -- [--per-category 2] [--data ../shared/data/meshes]
-//!     [--camera phoxi_s|primesense|realsense_d435] [--top-down-only] [--shell] [--top10]
+//!     [--camera phoxi_s|primesense|realsense_d435] [--top-down-only] [--shell] [--grip-surface] [--top10]
 //!     [--gqcnn EXPORT.json]
 //! ```
 //!
@@ -63,6 +63,10 @@ struct Args {
     /// 1 mm) instead of the hull or VHACD's parts.
     #[arg(long)]
     shell: bool,
+    /// The hand in the physics trial grips the mesh's own surface instead of the collision
+    /// shape (`PhysicsParams::grip_true_surface`; slower).
+    #[arg(long)]
+    grip_surface: bool,
     /// Also try the planner's next choices in physics: the precision of its top 10 (the best
     /// ten candidates that pass the hand check), per object.
     #[arg(long)]
@@ -143,6 +147,7 @@ fn run(args: &Args) -> Result<(), String> {
                 ..Default::default()
             };
             params.labels.physics_shape.shell = args.shell;
+            params.labels.physics.grip_true_surface = args.grip_surface;
             params.views.radius_m = *radius_m;
             let gripper = params.labels.gripper().map_err(|e| e.to_string())?;
             let net = match (&args.gqcnn, model.name == models::GQCNN_TOPDOWN.name) {

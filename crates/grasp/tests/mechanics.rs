@@ -149,6 +149,17 @@ fn upright_cylinder() -> (TriangleMesh, Pose3) {
     (mesh, Pose3::from_translation(Vec3::new(0.0, 0.0, 0.04)))
 }
 
+/// The upright cylinder gripped across its axis, halfway up.
+fn cylinder_across(params: &PhysicsParams) -> PhysicsOutcome {
+    let (mesh, on_table) = upright_cylinder();
+    trial(
+        &mesh,
+        on_table,
+        &top_down(Vec3::new(0.0, 0.0, 0.04), 0.0, 0.06),
+        params,
+    )
+}
+
 #[test]
 fn a_cylinder_gripped_across_its_axis_holds_and_one_gripped_on_a_chord_slides_off() {
     // Closing along x, the closing line offset by e along y. While the pad spans the cylinder's
@@ -168,12 +179,7 @@ fn a_cylinder_gripped_across_its_axis_holds_and_one_gripped_on_a_chord_slides_of
     let (mesh, on_table) = upright_cylinder();
     let radius = 0.03;
     let params = PhysicsParams::default();
-    let across = trial(
-        &mesh,
-        on_table,
-        &top_down(Vec3::new(0.0, 0.0, 0.04), 0.0, 0.06),
-        &params,
-    );
+    let across = cylinder_across(&params);
     assert!(across.success, "{across:?}");
     let friction_angle = gripper.pad_friction.atan();
     let chord = |angle: f32| {
@@ -219,4 +225,17 @@ fn an_approach_that_meets_the_object_fails_and_one_clearing_it_by_1mm_does_not()
         Some(FailureStage::Approach),
         "{shallow:?}"
     );
+}
+
+#[test]
+fn a_hand_gripping_the_true_surface_stops_on_it() {
+    // The cylinder across its axis, the hand gripping the mesh's own triangles: it holds, and
+    // the fingers stop on the surface (6 cm apart, less the pads' few tenths of a millimetre of
+    // contact softness), not inside it.
+    let across = cylinder_across(&PhysicsParams {
+        grip_true_surface: true,
+        ..PhysicsParams::default()
+    });
+    assert!(across.success, "{across:?}");
+    assert!((across.opening_m - 0.06).abs() < 0.002, "{across:?}");
 }

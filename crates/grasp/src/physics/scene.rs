@@ -27,6 +27,17 @@ const TABLE_HALF_THICKNESS_M: f32 = 0.05;
 const TABLE_GROUP: Group = Group::GROUP_1;
 const OBJECT_GROUP: Group = Group::GROUP_2;
 const GRIPPER_GROUP: Group = Group::GROUP_3;
+/// The object's own surface, when the hand grips it ([`PhysicsParams::grip_true_surface`]).
+const SURFACE_GROUP: Group = Group::GROUP_4;
+
+/// The object group the hand touches: its true surface or its collision shape.
+fn hand_touches(params: &PhysicsParams) -> Group {
+    if params.grip_true_surface {
+        SURFACE_GROUP
+    } else {
+        OBJECT_GROUP
+    }
+}
 
 /// The table, the object and, once added, the gripper.
 pub(crate) struct Scene {
@@ -247,6 +258,17 @@ impl Scene {
             object_body,
             &mut world.bodies,
         );
+        if params.grip_true_surface {
+            world.colliders.insert_with_parent(
+                ColliderBuilder::new(SharedShape(object.surface().clone()))
+                    .density(0.0)
+                    .friction(1.0)
+                    .friction_combine_rule(CoefficientCombineRule::Multiply)
+                    .collision_groups(groups(SURFACE_GROUP, GRIPPER_GROUP)),
+                object_body,
+                &mut world.bodies,
+            );
+        }
         Self {
             world,
             table,
@@ -331,7 +353,7 @@ impl Scene {
         params: &PhysicsParams,
         force_n: f32,
     ) -> Hand {
-        let gripper_groups = groups(GRIPPER_GROUP, TABLE_GROUP | OBJECT_GROUP);
+        let gripper_groups = groups(GRIPPER_GROUP, TABLE_GROUP | hand_touches(params));
         let friction = gripper.pad_friction;
         let world = &mut self.world;
         let (palm, _) = world.insert(
@@ -375,7 +397,7 @@ impl Scene {
                     .position(mirror)
                     .density(0.0)
                     .friction(friction)
-                    .collision_groups(groups(GRIPPER_GROUP, OBJECT_GROUP)),
+                    .collision_groups(groups(GRIPPER_GROUP, hand_touches(params))),
                 finger,
                 &mut world.bodies,
             );
