@@ -28,9 +28,9 @@
 //! the object and the table. A round pad pressed with F resists a twist about its normal with
 //! up to (2/3) mu F r: on a flat face the ring's contacts give exactly that (each has the lever
 //! arm (2/3) r), and where fewer of them touch (a curved surface) a brake about the closing
-//! axis makes up the rest, so the pad behaves as a patch, not a point. Contact recycling and
-//! clustering are off: a held object moves with the fingers, and recycled contacts would never
-//! be updated while the fingers sink into it; clustering would merge the pad's contacts.
+//! axis makes up the rest, so the pad behaves as a patch, not a point; the brake reads the
+//! solver's (clustered) contacts. Contacts are recycled only while a pair moves less than
+//! 0.3 mm (rapier's default let the fingers squeeze through a can on stale contacts).
 //!
 //! `tests/mechanics.rs` checks the trial against answers from mechanics at 0.9 and 1.1 times
 //! each threshold: a squeezed box sliding out (m g = 2 mu F), a bar turning in the grip (its
@@ -42,10 +42,12 @@
 //! 1. Settle: the object alone on the table for [`PhysicsParams::settle_time_s`]. If it moves
 //!    more than the settle tolerances the pose is not stable: [`FailureStage::Settle`].
 //! 2. Approach: the open gripper (fingers open for the grasp) moves along its approach from
-//!    the gripper's `approach_distance_m` back to the grasp pose. It is checked by an exact
-//!    swept-volume test (conservative advancement on exact distances from both fingers and the
-//!    palm to the table and the settled object), not stepped: coming within 0.1 mm of anything
-//!    on the way, or at either end, is [`FailureStage::Approach`]. A kinematic hand stepped
+//!    the gripper's `approach_distance_m` back to the grasp pose. It is checked by a
+//!    swept-volume test (conservative advancement on lower bounds of the distances from both
+//!    fingers and the palm to the table and to the settled object's own triangles, by
+//!    separating axes: not its collision shape, which may bulge past the surface), not
+//!    stepped: coming within 0.1 mm of anything on the way, or at either end, is
+//!    [`FailureStage::Approach`]. A kinematic hand stepped
 //!    along the same path would feel the same contacts later and more coarsely, and could
 //!    tunnel through a thin part; the sweep needs no simulated time.
 //! 3. Close: the fingers close until both stop (three steps slower than a tenth of the closing

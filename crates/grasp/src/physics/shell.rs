@@ -1,5 +1,5 @@
 //! The physics trial's object shapes: a mesh's convex hull where that stays on the surface,
-//! else a shell of convex slabs that follow it ([`shell_parts`]); and the measure of how far a
+//! else a shell of convex slabs that follow it (`shell_parts`); and the measure of how far a
 //! shape strays from the mesh ([`ShapeError`]).
 //!
 //! A convex decomposition of the volume (VHACD) cannot follow a surface closely: its parts come
@@ -31,7 +31,7 @@ pub struct ShapeParams {
     /// surface. Off by default: the fingers pass through the shell (side grasps on a 6.8 cm
     /// can end with the fingers 0 to 3 cm apart, whatever the slabs' thickness): rapier's
     /// contacts with thin convex parts come from parry 0.31's GJK, which misreads them (the
-    /// trial's approach backs it with separating axes, [`crate::separation`]; the contacts
+    /// trial's approach backs it with separating axes, `crate::separation`; the contacts
     /// cannot be). See the README's physics section.
     pub shell: bool,
     /// No part may stand further than this outside the mesh, metres.
