@@ -28,7 +28,7 @@ use mvgrasp::geometry::{Intrinsics, IntrinsicsPreset, TriangleMesh, load_mesh};
 use mvgrasp::grasp::GraspObject;
 use mvgrasp::grasp::physics::FailureStage;
 use mvgrasp::infer::Gqcnn;
-use mvgrasp::planner::{GqcnnPolicy, PlanParams, ShippedModel, check_grasp, models, plan_grasp};
+use mvgrasp::planner::{GqcnnPolicy, PlanParams, ShippedModel, check_grasps, models, plan_grasp};
 use mvgrasp::render::{Backend, Renderer};
 
 /// Plan with each policy on unseen objects; check the chosen grasps in physics.
@@ -134,32 +134,44 @@ fn run(args: &Args) -> Result<(), String> {
             "scaled to the camera's focal length"
         }
     );
+    // Each policy's settings, gripper and network, prepared once for every object.
+    let mut prepared = Vec::new();
+    for (_, model, views, radius_m) in policies {
+        let mut params = PlanParams {
+            max_views: *views,
+            intrinsics: Intrinsics::preset(preset),
+            hand_check: !args.no_hand_check,
+            ..Default::default()
+        };
+        params.labels.physics_shape.shell = args.shell;
+        params.labels.physics.grip_true_surface = args.grip_surface;
+        params.views.radius_m = *radius_m;
+        let gripper = params.labels.gripper().map_err(|e| e.to_string())?;
+        let net = match (&args.gqcnn, model.name == models::GQCNN_TOPDOWN.name) {
+            (Some(path), true) => Gqcnn::load(path).map_err(|e| e.to_string())?,
+            _ => model.load().map_err(|e| e.to_string())?,
+        };
+        let mut policy = GqcnnPolicy::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
+        if args.unscaled_crops {
+            policy.contract.focal_px = params.intrinsics.fx;
+        }
+        prepared.push((params, gripper, policy));
+    }
     let mut tallies: Vec<Tally> = policies.iter().map(|_| Tally::default()).collect();
     println!(
         "object                         policy                 quality  free  robust  physics"
     );
     for (name, mesh) in &objects {
-        for ((label, model, views, radius_m), tally) in policies.iter().zip(&mut tallies) {
-            let mut params = PlanParams {
-                max_views: *views,
-                intrinsics: Intrinsics::preset(preset),
-                hand_check: !args.no_hand_check,
-                ..Default::default()
-            };
-            params.labels.physics_shape.shell = args.shell;
-            params.labels.physics.grip_true_surface = args.grip_surface;
-            params.views.radius_m = *radius_m;
-            let gripper = params.labels.gripper().map_err(|e| e.to_string())?;
-            let net = match (&args.gqcnn, model.name == models::GQCNN_TOPDOWN.name) {
-                (Some(path), true) => Gqcnn::load(path).map_err(|e| e.to_string())?,
-                _ => model.load().map_err(|e| e.to_string())?,
-            };
-            let mut policy =
-                GqcnnPolicy::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
-            if args.unscaled_crops {
-                policy.contract.focal_px = params.intrinsics.fx;
-            }
-            let report = match plan_grasp(&renderer, mesh, &policy, &params) {
+        // For --top10's checks (plan_grasp prepares its own for the best grasp).
+        let object = args
+            .top10
+            .then(|| GraspObject::new(mesh.clone()))
+            .transpose()
+            .map_err(|e| e.to_string())?;
+        for (((label, ..), (params, gripper, policy)), tally) in
+            policies.iter().zip(&prepared).zip(&mut tallies)
+        {
+            let report = match plan_grasp(&renderer, mesh, policy, params) {
                 Ok(r) => r,
                 Err(e) => {
                     println!("{name:<30} {label:<22} error: {e}");
@@ -190,30 +202,27 @@ fn run(args: &Args) -> Result<(), String> {
                     None => "held".into(),
                     Some(stage) => format!("{stage:?}"),
                 });
-            let top10 = if args.top10 {
-                let object = GraspObject::new(mesh.clone()).map_err(|e| e.to_string())?;
-                let mut held = 0;
-                let mut tried = 0;
-                for choice in &report.top {
-                    let label = check_grasp(
-                        &object,
-                        &report.table_from_object,
-                        choice,
-                        &gripper,
-                        &params,
-                    )
-                    .map_err(|e| e.to_string())?;
-                    if let Some(p) = label.physics
-                        && p.failed_at != Some(FailureStage::Settle)
-                    {
-                        tried += 1;
-                        held += usize::from(p.success);
-                    }
+            let top10 = if let Some(object) = &object {
+                let labels = check_grasps(
+                    object,
+                    &report.table_from_object,
+                    &report.top,
+                    gripper,
+                    params,
+                )
+                .map_err(|e| e.to_string())?;
+                // As for the best grasp: a trial that lost the resting pose is left out.
+                let trials: Vec<bool> = labels
+                    .iter()
+                    .filter_map(|l| l.physics)
+                    .filter(|p| p.failed_at != Some(FailureStage::Settle))
+                    .map(|p| p.success)
+                    .collect();
+                let held = trials.iter().filter(|&&h| h).count();
+                if !trials.is_empty() {
+                    tally.top10.push(held as f64 / trials.len() as f64);
                 }
-                if tried > 0 {
-                    tally.top10.push(held as f64 / tried as f64);
-                }
-                format!("  top {}: {held} held", tried)
+                format!("  top {}: {held} held", trials.len())
             } else {
                 String::new()
             };

@@ -9,6 +9,6 @@ pub use mvgrasp_planner::{
     ViewSetting, models, sample_image_grasps,
 };
 pub use pipeline::{
-    AnalyticCheck, PlanParams, PlanReport, PlanTimings, Scene, check_grasp, plan_grasp,
-    render_scene,
+    AnalyticCheck, PlanParams, PlanReport, PlanTimings, Scene, check_grasp, check_grasps,
+    plan_grasp, render_scene,
 };

@@ -190,6 +190,26 @@ pub fn check_grasp(
     gripper: &Gripper,
     params: &PlanParams,
 ) -> Result<GraspLabel> {
+    Ok(check_grasps(
+        object,
+        table_from_object,
+        std::slice::from_ref(grasp),
+        gripper,
+        params,
+    )?[0])
+}
+
+/// [`check_grasp`] for several grasps on one object, which is prepared for physics once.
+///
+/// # Errors
+/// See [`check_grasp`].
+pub fn check_grasps(
+    object: &GraspObject,
+    table_from_object: &Pose3,
+    grasps: &[ScoredGrasp],
+    gripper: &Gripper,
+    params: &PlanParams,
+) -> Result<Vec<GraspLabel>> {
     let body = if params.physics {
         Some(PhysicsObject::from_grasp_object(
             object,
@@ -198,14 +218,15 @@ pub fn check_grasp(
     } else {
         None
     };
+    let grasps: Vec<_> = grasps.iter().map(|g| g.grasp).collect();
     Ok(label_grasps(
         object,
         table_from_object,
-        &[grasp.grasp],
+        &grasps,
         gripper,
         &params.labels.label_params(body.as_ref()),
         params.seed,
-    )?[0])
+    )?)
 }
 
 /// The main job in its three stages: [`render_scene`] (the object at rest and the views' depth),
