@@ -3,8 +3,8 @@
     python -m mvgrasp_training.evaluate MODEL.json DATASET [DATASET ...] [--held-out F --seed S]
 
 Prints, per dataset, the balanced accuracy, accuracy, precision and recall of the robust label
-(or with ``--label`` the physics label or both) at 0.5 as JSON, and precision and recall at the stricter thresholds a planner that takes only
-confident grasps uses (0.8, 0.9). With ``--held-out F --seed S`` only the objects a training
+(or with ``--label`` the physics label or both) at 0.5 as JSON, and precision and recall at the
+stricter thresholds a planner that takes only confident grasps uses (0.8, 0.9). With ``--held-out F --seed S`` only the objects a training
 config with ``val_fraction = F`` and ``seed = S`` holds out are scored (the validation objects of
 that run: a network trained with that config never saw them). The network takes what its pose stream takes from each datapoint: the grasp
 depth, and theta for a multi-view GQ-CNN; a top-down GQ-CNN applied to a multi-view dataset
@@ -57,7 +57,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("datasets", type=Path, nargs="+", help="grasp_dataset output folders")
     parser.add_argument("--held-out", type=float, help="score only this split's held-out objects")
     parser.add_argument("--seed", type=int, default=0, help="the split's seed (with --held-out)")
-    parser.add_argument("--label", choices=LABELS, default="robust", help="the label scored against")
+    parser.add_argument(
+        "--label", choices=LABELS, default="robust", help="the label scored against"
+    )
     args = parser.parse_args(argv)
     held_out = None if args.held_out is None else (args.held_out, args.seed)
     print(json.dumps(evaluate(args.model, args.datasets, held_out, args.label), indent=2))

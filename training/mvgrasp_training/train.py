@@ -68,7 +68,8 @@ def shard_labels(shard: dict[str, np.ndarray], label: str, where: str) -> np.nda
     robust = np.asarray(shard["robust_label"], dtype=np.int64)
     if label == "robust":
         return robust
-    if "physics" not in shard:
+    # Shards made before physics labels hold one unperturbed trial in `physics` and no rate.
+    if "physics_rate" not in shard:
         raise ValueError(f"{where}: the dataset has no physics labels (made before them)")
     physics = np.asarray(shard["physics"], dtype=np.int64)
     free = np.asarray(shard["collision_free"], dtype=bool)

@@ -140,11 +140,12 @@ def test_the_physics_and_combined_labels_follow_the_trials() -> None:
         "robust_label": np.array([1, 1, 0, 0, 1], dtype=np.uint8),
         "collision_free": np.array([1, 1, 1, 0, 1], dtype=np.uint8),
         "physics": np.array([1, 0, 1, -1, -1], dtype=np.int8),
+        "physics_rate": np.array([0.7, 0.2, 0.5, -1.0, -1.0], dtype=np.float32),
     }
     assert shard_labels(shard, "robust", "d").tolist() == [1, 1, 0, 0, 1]
     # A colliding datapoint is a physics negative; a free one without trials has no label.
     assert shard_labels(shard, "physics", "d").tolist() == [1, 0, 1, 0, -1]
     assert shard_labels(shard, "both", "d").tolist() == [1, 0, 0, 0, -1]
-    old = {k: v for k, v in shard.items() if k != "physics"}
+    old = {k: v for k, v in shard.items() if k != "physics_rate"}
     with pytest.raises(ValueError, match="d: the dataset has no physics labels"):
         shard_labels(old, "physics", "d")
