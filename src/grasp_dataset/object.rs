@@ -2,9 +2,7 @@
 //! that render its depth, and the grasps that approach along each view.
 
 use mvgrasp_geometry::{Pose3, RestingPoses, TriangleMesh, Vec3};
-use mvgrasp_grasp::physics::{
-    FailureStage, PhysicsNoise, PhysicsObject, StageCounts, success_probability,
-};
+use mvgrasp_grasp::physics::{PhysicsNoise, PhysicsObject, success_probability};
 use mvgrasp_grasp::quality::{grasp_seed, robust_qualities};
 use mvgrasp_grasp::{
     AntipodalAxis, Grasp, GraspLabel, GraspObject, Gripper, canonical_frame, check_collision,
@@ -188,22 +186,6 @@ pub(crate) fn object_datapoints(
     Ok(points)
 }
 
-/// The stage most trials failed at (the earliest of a tie), if any failed.
-fn most_failed_stage(failures: &StageCounts) -> Option<FailureStage> {
-    FailureStage::ALL
-        .into_iter()
-        .map(|stage| (stage, failures.of(stage)))
-        .filter(|&(_, n)| n > 0)
-        .fold(
-            None,
-            |best: Option<(FailureStage, usize)>, (stage, n)| match best {
-                Some((_, m)) if m >= n => best,
-                _ => Some((stage, n)),
-            },
-        )
-        .map(|(stage, _)| stage)
-}
-
 /// The gripper frame (object frame) on `axis` whose approach is the camera's optical axis
 /// turned to lie across the grasp axis, if that turn is at most `max_tilt_rad`.
 fn aligned_frame(
@@ -259,19 +241,20 @@ fn run_physics(
     config: &GraspDatasetConfig,
     resolved: &Resolved,
 ) -> Result<()> {
+    // A datapoint's seed for `what`, from its ids.
+    let seed = |what: u64, p: &Datapoint| {
+        seed_of(
+            object_seed,
+            what,
+            u64::from(p.stable_pose) << 32 | u64::from(p.view),
+            u64::from(p.grasp),
+        )
+    };
     let threshold = (config.physics_fraction as f64 * u64::MAX as f64) as u64;
     let chosen: Vec<usize> = points
         .iter()
         .enumerate()
-        .filter(|(_, p)| {
-            p.collision_free
-                && seed_of(
-                    object_seed,
-                    PHYSICS,
-                    u64::from(p.stable_pose) << 32 | u64::from(p.view),
-                    u64::from(p.grasp),
-                ) <= threshold
-        })
+        .filter(|(_, p)| p.collision_free && seed(PHYSICS, p) <= threshold)
         .map(|(i, _)| i)
         .collect();
     let noise = PhysicsNoise::matching(&config.quality);
@@ -284,12 +267,6 @@ fn run_physics(
                 world_from_gripper: *table_from_object * object_from_gripper,
                 width_m: p.width_m,
             };
-            let seed = seed_of(
-                object_seed,
-                PHYSICS_NOISE,
-                u64::from(p.stable_pose) << 32 | u64::from(p.view),
-                u64::from(p.grasp),
-            );
             success_probability(
                 physics_object,
                 table_from_object,
@@ -298,7 +275,7 @@ fn run_physics(
                 &config.physics,
                 &noise,
                 config.physics_trials,
-                seed,
+                seed(PHYSICS_NOISE, p),
             )
         })
         .collect::<std::result::Result<Vec<_>, _>>()?;
@@ -308,7 +285,7 @@ fn run_physics(
         let rate = estimate.settled_rate();
         points[i].physics_rate = rate.map_or(-1.0, |r| r as f32);
         points[i].physics = rate.map_or(-1, |r| i8::from(r >= 0.5));
-        points[i].physics_stage = most_failed_stage(&estimate.failures).map_or(-1, |s| s as i8);
+        points[i].physics_stage = estimate.failures.most_common().map_or(-1, |s| s as i8);
     }
     Ok(())
 }

@@ -4,7 +4,7 @@
 //! parry 0.31's GJK gives up on thin shapes beside a box and reports them touching: its
 //! `distance` returns 0 for slabs of the physics trial's shell 1 to 10 mm from a finger (about
 //! 40 % of the pairs it reads as touching near a real mesh's shell, where the separating axes
-//! find them apart; its `intersection_test` agrees with neither consistently). Two
+//! find them apart; its `intersection_test` called some of those intersecting too). Two
 //! convex polytopes are apart exactly when one of a finite set of axes separates them (the
 //! faces' normals and the cross products of the edges' directions), and the gap along any axis
 //! is at most their distance; so the widest gap over those axes decides "apart" exactly and

@@ -65,6 +65,16 @@ impl StageCounts {
         }
     }
 
+    /// The stage most failures happened at (the earliest of a tie); `None` without failures.
+    pub fn most_common(&self) -> Option<FailureStage> {
+        // `max_by_key` keeps the last of equal maxima: walk the stages backwards.
+        FailureStage::ALL
+            .into_iter()
+            .rev()
+            .filter(|&stage| self.of(stage) > 0)
+            .max_by_key(|&stage| self.of(stage))
+    }
+
     /// Counts one failure at `stage`.
     pub fn count(&mut self, stage: FailureStage) {
         let slot = match stage {
@@ -191,6 +201,20 @@ fn perturb(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_most_common_failure_is_the_earliest_of_a_tie() {
+        assert_eq!(StageCounts::default().most_common(), None);
+        let counts = StageCounts {
+            approach: 2,
+            lift: 2,
+            shake: 1,
+            ..StageCounts::default()
+        };
+        assert_eq!(counts.most_common(), Some(FailureStage::Approach));
+        let counts = StageCounts { shake: 3, ..counts };
+        assert_eq!(counts.most_common(), Some(FailureStage::Shake));
+    }
 
     #[test]
     fn the_settled_rate_leaves_out_trials_that_lost_the_pose() {

@@ -594,9 +594,10 @@ fn exact_distance(pose_a: &Pose3, a: &dyn Shape, pose_b: &Pose3, b: &dyn Shape) 
     Some(best)
 }
 
-/// The largest convex part whose GJK "touching" the separating axes check: a shell's slabs
-/// (where GJK fails) have a few dozen corners; the check costs corners times edges, so on an
-/// object's hull of thousands of corners it took a third of a trial, to confirm real touches.
+/// The most corners a convex part may have for the separating axes to re-check a GJK
+/// "touching" on it: a shell's slabs (where GJK fails) have a few dozen; the check costs
+/// corners times edges, and on an object's hull of thousands of corners it took a third of a
+/// trial, only to confirm real touches.
 const MAX_CHECKED_HULL_POINTS: usize = 64;
 
 /// The distance between two boxes (0 when they overlap).
