@@ -2,13 +2,13 @@
 //! that is positive exactly when they are apart.
 //!
 //! parry 0.31's GJK gives up on thin shapes beside a box and reports them touching: its
-//! `distance` returns 0 for slabs of the physics trial's shell 1 to 10 mm from a finger (about
-//! 40 % of the pairs it reads as touching near a real mesh's shell, where the separating axes
-//! find them apart; its `intersection_test` called some of those intersecting too). Two
-//! convex polytopes are apart exactly when one of a finite set of axes separates them (the
-//! faces' normals and the cross products of the edges' directions), and the gap along any axis
-//! is at most their distance; so the widest gap over those axes decides "apart" exactly and
-//! bounds the distance from below.
+//! `distance` returns 0 for slabs of the physics trial's shell up to 10 mm from a finger (of
+//! the pairs it read as touching near the shells of YCB's soup can and mustard and Dex-Net's
+//! bar clamp, 41 %, 27 % and 12 % were more than 0.1 mm apart by the separating axes; its
+//! `intersection_test` called some of those intersecting too). Two convex polytopes are apart
+//! exactly when one of a finite set of axes separates them (the faces' normals and the cross
+//! products of the edges' directions), and the gap along any axis is at most their distance; so
+//! the widest gap over those axes decides "apart" exactly and bounds the distance from below.
 
 use mvgrasp_geometry::{Pose3, Vec3};
 use parry3d::bounding_volume::BoundingVolume;
