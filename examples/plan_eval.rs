@@ -18,7 +18,8 @@
 
 mod common;
 
-use common::REAL_MESHES;
+use common::{REAL_MESHES, wilson_95};
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -88,6 +89,8 @@ struct Tally {
     seconds: f64,
     /// With --top10: per object, the share of its top choices (up to 10) that held.
     top10: Vec<f64>,
+    /// Per category (the real meshes as one): (held, tried).
+    by_group: BTreeMap<&'static str, (usize, usize)>,
 }
 
 fn main() -> ExitCode {
@@ -95,11 +98,12 @@ fn main() -> ExitCode {
 }
 
 fn run(args: &Args) -> Result<(), String> {
-    let mut objects: Vec<(String, TriangleMesh)> = Vec::new();
+    // (name, group, mesh): the group is the category, or "real meshes".
+    let mut objects: Vec<(String, &'static str, TriangleMesh)> = Vec::new();
     for category in Category::ALL {
         for index in 30..30 + args.per_category {
             let o = generate(category, index, 0).map_err(|e| e.to_string())?;
-            objects.push((o.name, o.mesh));
+            objects.push((o.name, category.name(), o.mesh));
         }
     }
     // The two YCB boxes have no Panda grasp (see REAL_MESHES); the pybullet mug's URDF has a
@@ -108,7 +112,8 @@ fn run(args: &Args) -> Result<(), String> {
         let path = args.data.join(m);
         if path.is_file() {
             let mesh = load_mesh(&path).map_err(|e| e.to_string())?;
-            objects.push((m.rsplit('/').next().unwrap_or(m).to_string(), mesh));
+            let name = m.rsplit('/').next().unwrap_or(m).to_string();
+            objects.push((name, "real meshes", mesh));
         }
     }
     let preset: IntrinsicsPreset = args.camera.parse().map_err(|e| format!("--camera: {e}"))?;
@@ -161,7 +166,7 @@ fn run(args: &Args) -> Result<(), String> {
     println!(
         "object                         policy                 quality  free  robust  physics"
     );
-    for (name, mesh) in &objects {
+    for (name, group, mesh) in &objects {
         // For --top10's checks (plan_grasp prepares its own for the best grasp).
         let object = args
             .top10
@@ -196,6 +201,9 @@ fn run(args: &Args) -> Result<(), String> {
             tally.free += usize::from(free);
             tally.tried += usize::from(settled);
             tally.held += usize::from(held);
+            let in_group = tally.by_group.entry(group).or_default();
+            in_group.0 += usize::from(held);
+            in_group.1 += usize::from(settled);
             let physics = report
                 .physics
                 .map_or("-".to_string(), |p| match p.failed_at {
@@ -236,20 +244,36 @@ fn run(args: &Args) -> Result<(), String> {
     }
     println!("\n{} objects", objects.len());
     println!(
-        "policy                 planned  collision-free  robust label  held in physics (of trials)  plan time/object"
+        "policy                 planned  collision-free  robust label  held in physics (of trials)  95% interval  plan time/object"
     );
+    let pct = |k: usize, n: usize| 100.0 * k as f64 / n.max(1) as f64;
+    let interval = |k: usize, n: usize| {
+        let (lo, hi) = wilson_95(k, n);
+        format!("{:.0}-{:.0}%", 100.0 * lo, 100.0 * hi)
+    };
     for ((label, ..), t) in policies.iter().zip(&tallies) {
-        let pct = |k: usize, n: usize| 100.0 * k as f64 / n.max(1) as f64;
         println!(
-            "{label:<22} {:>7}  {:>13.0}%  {:>11.0}%  {:>9.0}% ({:>2} of {:>2})  {:>14.2} s",
+            "{label:<22} {:>7}  {:>13.0}%  {:>11.0}%  {:>9.0}% ({:>2} of {:>2})  {:>12}  {:>14.2} s",
             t.planned,
             pct(t.free, t.planned),
             pct(t.robust, t.planned),
             pct(t.held, t.tried),
             t.held,
             t.tried,
+            interval(t.held, t.tried),
             t.seconds / objects.len().max(1) as f64
         );
+    }
+    println!("\nheld in physics per category (of trials)");
+    for ((label, ..), t) in policies.iter().zip(&tallies) {
+        println!("{label}");
+        for (group, &(held, tried)) in &t.by_group {
+            println!(
+                "  {group:<14} {:>4.0}% ({held:>2} of {tried:>2})  {:>9}",
+                pct(held, tried),
+                interval(held, tried)
+            );
+        }
     }
     if args.top10 {
         println!("\nprecision of the top choices (up to 10 per object, mean over objects)");

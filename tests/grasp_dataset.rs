@@ -121,6 +121,40 @@ fn every_collision_free_datapoint_gets_a_physics_label_from_k_trials() {
     }
     assert!(labelled > 0, "{summary:?}");
     assert_eq!(summary.totals.physics_trials, labelled);
+
+    // The physics labels change nothing else: without them every other column is the same
+    // bytes (so the shipped datasets' configs could gain them without changing the networks'
+    // training data).
+    let plain = tempfile::tempdir().unwrap();
+    let config = GraspDatasetConfig {
+        physics_fraction: 0.0,
+        physics_trials: 1,
+        ..config
+    };
+    generate(
+        &renderer,
+        &sources(&[Category::Box]),
+        &config,
+        plain.path(),
+        false,
+    )
+    .unwrap();
+    let bytes = std::fs::read(plain.path().join("shard_00000.safetensors")).unwrap();
+    let without = SafeTensors::deserialize(&bytes).unwrap();
+    let physics_columns = ["physics", "physics_rate", "physics_stage"];
+    let mut compared = 0;
+    for (name, column) in shard.tensors() {
+        if physics_columns.contains(&name.as_str()) {
+            continue;
+        }
+        assert_eq!(
+            column.data(),
+            without.tensor(&name).unwrap().data(),
+            "column {name}"
+        );
+        compared += 1;
+    }
+    assert!(compared >= 15, "{compared} columns");
 }
 
 #[test]

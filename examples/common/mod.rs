@@ -68,3 +68,17 @@ pub fn analyse_at_rest(
         analysis,
     }))
 }
+
+/// The Wilson score interval of `k` successes in `n` trials at 95 % confidence, as fractions
+/// (`(0, 1)` for no trials).
+#[allow(dead_code)] // see EvalArgs
+pub fn wilson_95(k: usize, n: usize) -> (f64, f64) {
+    if n == 0 {
+        return (0.0, 1.0);
+    }
+    let (k, n, z) = (k as f64, n as f64, 1.959_964);
+    let p = k / n;
+    let centre = (p + z * z / (2.0 * n)) / (1.0 + z * z / n);
+    let half = z / (1.0 + z * z / n) * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt();
+    ((centre - half).max(0.0), (centre + half).min(1.0))
+}
