@@ -149,13 +149,36 @@ impl GqcnnPolicy {
 
     /// The scored candidates of one view, in sampling order.
     fn score_view(&self, index: usize, view: &View, seed: u64) -> Result<Vec<ScoredGrasp>> {
-        let crop = self.contract.crop_for(&view.camera.intrinsics)?;
         let grasps = sample_image_grasps(&view.depth, self.max_width_m, &self.sampler, seed);
+        let quality = self.score(view, &grasps)?;
+        let theta = view.theta_rad();
+        Ok(grasps
+            .iter()
+            .zip(quality)
+            .map(|(g, q)| ScoredGrasp {
+                view: index,
+                image: *g,
+                grasp: g.to_world(&view.camera),
+                theta_rad: theta,
+                quality: q,
+            })
+            .collect())
+    }
+
+    /// The network's probability that each grasp, in `view`'s image, is robust: its crop cut to
+    /// the contract for the view's camera, with the grasp's depth (and the view's theta for a
+    /// multi-view network) as the pose input.
+    ///
+    /// # Errors
+    /// [`PlannerError::Camera`] for a view whose camera the network cannot be fed, or a network
+    /// error.
+    pub fn score(&self, view: &View, grasps: &[ImageGrasp]) -> Result<Vec<f32>> {
+        let crop = self.contract.crop_for(&view.camera.intrinsics)?;
         let theta = view.theta_rad();
         let pose_inputs = self.net.architecture().pose_inputs;
         let side = crop.size_px as usize;
         let mut workspace = GqcnnWorkspace::default();
-        let mut scored = Vec::with_capacity(grasps.len());
+        let mut quality = Vec::with_capacity(grasps.len());
         for chunk in grasps.chunks(self.batch.max(1)) {
             let mut crops = Vec::with_capacity(chunk.len() * side * side);
             let mut poses = Vec::with_capacity(chunk.len() * pose_inputs);
@@ -168,15 +191,8 @@ impl GqcnnPolicy {
             }
             let depth = Tensor::new(&[chunk.len(), 1, side, side], crops)?;
             let pose = Tensor::new(&[chunk.len(), pose_inputs], poses)?;
-            let quality = self.net.predict(&depth, &pose, &mut workspace)?;
-            scored.extend(chunk.iter().zip(quality).map(|(g, q)| ScoredGrasp {
-                view: index,
-                image: *g,
-                grasp: g.to_world(&view.camera),
-                theta_rad: theta,
-                quality: q,
-            }));
+            quality.extend(self.net.predict(&depth, &pose, &mut workspace)?);
         }
-        Ok(scored)
+        Ok(quality)
     }
 }
