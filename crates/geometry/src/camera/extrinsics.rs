@@ -143,23 +143,66 @@ pub fn read_tf(path: impl AsRef<Path>) -> Result<(String, String, Pose3)> {
     };
     let t = row(2)?;
     let rows = [row(3)?, row(4)?, row(5)?];
+    let pose = rigid_pose(rows, t).map_err(parse_error)?;
+    Ok((lines[0].to_string(), lines[1].to_string(), pose))
+}
+
+/// A camera's pose in the world from a file: a Berkeley `.tf` file from the camera's frame to
+/// the world ([`read_tf`]), or a JSON `{"world_from_camera": [[...], [...], [...], [...]]}`,
+/// a 4x4 rigid transform in rows (last row 0, 0, 0, 1), metres.
+///
+/// # Errors
+/// [`GeometryError::NotFound`], or [`GeometryError::Parse`] naming the file when it does not
+/// parse or the matrix is not a rigid transform.
+pub fn read_camera_pose(path: impl AsRef<Path>) -> Result<Pose3> {
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct PoseJson {
+        world_from_camera: [[f64; 4]; 4],
+    }
+    let path = path.as_ref();
+    if path.extension().is_some_and(|e| e == "tf") {
+        return read_tf(path).map(|(_, _, pose)| pose);
+    }
+    let text = read_text(path)?;
+    let parse_error = |detail: String| GeometryError::Parse {
+        format: "camera pose JSON (world_from_camera)",
+        detail,
+        path: path.to_path_buf(),
+    };
+    let m = serde_json::from_str::<PoseJson>(&text)
+        .map_err(|e| parse_error(e.to_string()))?
+        .world_from_camera;
+    if m[3] != [0.0, 0.0, 0.0, 1.0] {
+        return Err(parse_error(format!(
+            "the last row is {:?}, not [0, 0, 0, 1]: not a rigid transform",
+            m[3]
+        )));
+    }
+    let rows = [0, 1, 2].map(|i| [m[i][0], m[i][1], m[i][2]]);
+    rigid_pose(rows, [m[0][3], m[1][3], m[2][3]]).map_err(parse_error)
+}
+
+/// The pose with rotation `rows` and translation `t`, if the rotation is a proper one (within
+/// 1e-3) and everything is finite.
+fn rigid_pose(rows: [[f64; 3]; 3], t: [f64; 3]) -> std::result::Result<Pose3, String> {
+    if !rows.iter().flatten().chain(&t).all(|v| v.is_finite()) {
+        return Err("a value is not finite".into());
+    }
     let r = Matrix3::from_fn(|i, j| rows[i][j]);
     let orthonormality = (r.transpose() * r - Matrix3::identity()).abs().max();
     if !(orthonormality < 1e-3 && (r.determinant() - 1.0).abs() < 1e-3) {
-        return Err(parse_error(format!(
-            "the rotation is not a proper rotation (|R^T R - I| = {orthonormality:.2e}, det = {:.4})",
+        return Err(format!(
+            "the rotation is not a proper rotation (|R^T R - I| = {orthonormality:.2e}, det = {:.4}): \
+             not a rigid transform",
             r.determinant()
-        )));
+        ));
     }
     let cols = [0, 1, 2].map(|j| Vec3::new(r[(0, j)] as f32, r[(1, j)] as f32, r[(2, j)] as f32));
     let rotation =
         Rot3::from_mat3(&parry3d::math::Mat3::from_cols(cols[0], cols[1], cols[2])).normalize();
     let translation = Vec3::new(t[0] as f32, t[1] as f32, t[2] as f32);
-    Ok((
-        lines[0].to_string(),
-        lines[1].to_string(),
-        Pose3::from_parts(translation, rotation),
-    ))
+    Ok(Pose3::from_parts(translation, rotation))
 }
 
 #[cfg(test)]

@@ -221,6 +221,60 @@ impl Intrinsics {
         Ok(intrinsics)
     }
 
+    /// Reads intrinsics from a file: the Berkeley `.intr` JSON ([`Intrinsics::from_intr_file`]),
+    /// or a plain JSON with the 3x3 camera matrix and the image size,
+    /// `{"K": [[fx, 0, cx], [0, fy, cy], [0, 0, 1]], "width": W, "height": H}` (a `.json` with
+    /// the `.intr` keys reads as one), with the presets' depth range.
+    ///
+    /// # Errors
+    /// [`GeometryError::NotFound`], or [`GeometryError::Parse`] naming the file: a missing key,
+    /// a matrix with skew or a last row other than (0, 0, 1), or a bad value.
+    pub fn from_file(path: impl AsRef<Path>) -> Result<Self> {
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct PlainJson {
+            #[serde(rename = "K")]
+            k: [[f64; 3]; 3],
+            width: u32,
+            height: u32,
+        }
+        let path = path.as_ref();
+        let text = read_text(path)?;
+        let parse_error = |detail: String| GeometryError::Parse {
+            format: "intrinsics JSON (K, width, height)",
+            detail,
+            path: path.to_path_buf(),
+        };
+        let is_intr = path.extension().is_some_and(|e| e == "intr")
+            || serde_json::from_str::<serde_json::Value>(&text)
+                .is_ok_and(|v| v.get("_fx").is_some());
+        if is_intr {
+            return Self::from_intr_file(path);
+        }
+        let plain: PlainJson =
+            serde_json::from_str(&text).map_err(|e| parse_error(e.to_string()))?;
+        let k = plain.k;
+        if k[0][1] != 0.0 || k[1][0] != 0.0 || k[2] != [0.0, 0.0, 1.0] {
+            return Err(parse_error(format!(
+                "K = {k:?}: expected [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] (no skew)"
+            )));
+        }
+        let intrinsics = Self {
+            fx: k[0][0] as f32,
+            fy: k[1][1] as f32,
+            cx: k[0][2] as f32,
+            cy: k[1][2] as f32,
+            width: plain.width,
+            height: plain.height,
+            z_near_m: Z_NEAR_M,
+            z_far_m: Z_FAR_M,
+        };
+        intrinsics
+            .validate()
+            .map_err(|e| parse_error(e.to_string()))?;
+        Ok(intrinsics)
+    }
+
     /// The pixel (u, v) where a point in the camera frame projects, or `None` behind the camera.
     pub fn project(&self, camera_point: Vec3) -> Option<[f32; 2]> {
         (camera_point.z > 0.0).then(|| {
