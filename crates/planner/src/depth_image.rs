@@ -81,14 +81,105 @@ impl DepthImage {
     }
 }
 
+/// Which pixels of an image are the object (a segmentation mask), row-major.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Mask {
+    width: u32,
+    height: u32,
+    pixels: Vec<bool>,
+}
+
+impl Mask {
+    /// A `width` x `height` mask.
+    ///
+    /// # Errors
+    /// [`PlannerError::Mask`] when `pixels` has another length or no pixel is set.
+    pub fn new(width: u32, height: u32, pixels: Vec<bool>) -> Result<Self> {
+        let expected = width as usize * height as usize;
+        if pixels.len() != expected {
+            return Err(PlannerError::Mask(format!(
+                "{} values for a {width} x {height} image (expected {expected})",
+                pixels.len()
+            )));
+        }
+        if !pixels.contains(&true) {
+            return Err(PlannerError::Mask("no object pixel".into()));
+        }
+        Ok(Self {
+            width,
+            height,
+            pixels,
+        })
+    }
+
+    /// Width, pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height, pixels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// Whether column `u`, row `v` is the object; `false` outside the image.
+    pub fn at(&self, u: i64, v: i64) -> bool {
+        let (w, h) = (i64::from(self.width), i64::from(self.height));
+        (0..w).contains(&u) && (0..h).contains(&v) && self.pixels[(v * w + u) as usize]
+    }
+
+    /// Object pixels.
+    pub fn count(&self) -> usize {
+        self.pixels.iter().filter(|&&p| p).count()
+    }
+
+    /// The mask grown by `radius_px` (a square neighbourhood): a pixel is set when one within
+    /// `radius_px` along both axes is.
+    pub fn dilated(&self, radius_px: u32) -> Mask {
+        let (w, h) = (self.width as usize, self.height as usize);
+        let r = radius_px as usize;
+        // Rows, then columns: two passes of a running window.
+        let grow = |line: &[bool]| -> Vec<bool> {
+            let n = line.len();
+            let mut prefix = vec![0usize; n + 1];
+            for (i, &p) in line.iter().enumerate() {
+                prefix[i + 1] = prefix[i] + usize::from(p);
+            }
+            (0..n)
+                .map(|i| prefix[(i + r + 1).min(n)] > prefix[i.saturating_sub(r)])
+                .collect()
+        };
+        let mut rows = Vec::with_capacity(w * h);
+        for line in self.pixels.chunks_exact(w) {
+            rows.extend(grow(line));
+        }
+        let mut pixels = vec![false; w * h];
+        for u in 0..w {
+            let column: Vec<bool> = (0..h).map(|v| rows[v * w + u]).collect();
+            for (v, p) in grow(&column).into_iter().enumerate() {
+                pixels[v * w + u] = p;
+            }
+        }
+        Mask {
+            width: self.width,
+            height: self.height,
+            pixels,
+        }
+    }
+}
+
 /// One view the planner looks through: a camera (pose and intrinsics) and the depth image it
-/// saw, whoever made it (the renderer, a sensor file, a depth predictor).
+/// saw, whoever made it (the renderer, a sensor file, a depth predictor), and which of its
+/// pixels are the object when that is known.
 #[derive(Clone, Debug)]
 pub struct View {
     /// Pose and intrinsics.
     pub camera: Camera,
     /// What it saw.
     pub depth: DepthImage,
+    /// The object's pixels: grasps are sampled on its edges, and both contacts must lie on it.
+    /// `None`: anything seen may be grasped.
+    pub mask: Option<Mask>,
 }
 
 impl View {
@@ -106,7 +197,29 @@ impl View {
                 camera: camera.intrinsics,
             });
         }
-        Ok(Self { camera, depth })
+        Ok(Self {
+            camera,
+            depth,
+            mask: None,
+        })
+    }
+
+    /// This view with an object mask.
+    ///
+    /// # Errors
+    /// [`PlannerError::Mask`] for a mask of another size than the depth image.
+    pub fn with_mask(mut self, mask: Mask) -> Result<Self> {
+        if (mask.width(), mask.height()) != (self.depth.width(), self.depth.height()) {
+            return Err(PlannerError::Mask(format!(
+                "the mask is {} x {}, the depth image {} x {}",
+                mask.width(),
+                mask.height(),
+                self.depth.width(),
+                self.depth.height()
+            )));
+        }
+        self.mask = Some(mask);
+        Ok(self)
     }
 
     /// The angle between the optical axis and the table plane (the seed paper's theta, the
@@ -142,6 +255,22 @@ mod tests {
         assert_eq!(image.at(-1, 0), 0.0);
         assert_eq!(image.at(3, 0), 0.5);
         assert_eq!(image.at(i64::from(k.width), 0), 0.0);
+    }
+
+    #[test]
+    fn masks_check_their_size_and_grow() {
+        assert!(Mask::new(2, 2, vec![true; 3]).is_err());
+        assert!(Mask::new(2, 2, vec![false; 4]).is_err());
+        let mut pixels = vec![false; 25];
+        pixels[12] = true; // the centre of 5 x 5
+        let mask = Mask::new(5, 5, pixels).unwrap();
+        assert_eq!(mask.count(), 1);
+        let grown = mask.dilated(1);
+        assert_eq!(grown.count(), 9);
+        assert!(grown.at(1, 1) && grown.at(3, 3) && !grown.at(0, 2) && !grown.at(4, 4));
+        assert_eq!(mask.dilated(0), mask);
+        assert_eq!(mask.dilated(9).count(), 25);
+        assert!(!mask.at(-1, 0) && !mask.at(5, 0));
     }
 
     #[test]

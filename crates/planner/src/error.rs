@@ -54,6 +54,20 @@ pub enum PlannerError {
         /// Why not.
         detail: &'static str,
     },
+    /// A sensor file (depth image, mask) that cannot be read or holds something unusable.
+    #[error("{}: {detail}", path.display())]
+    File {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What is wrong with it.
+        detail: String,
+    },
+    /// A mask whose size is not its depth image's, or with no object pixel.
+    #[error("mask: {0}")]
+    Mask(String),
+    /// The table could not be found in a depth image, or nothing stands on it.
+    #[error("table: {0}")]
+    Table(String),
     /// Running a network failed (or its shipped weights are broken).
     #[error(transparent)]
     Infer(#[from] mvgrasp_infer::InferError),

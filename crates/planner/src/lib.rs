@@ -9,14 +9,18 @@ pub mod models;
 pub mod policy;
 pub mod sampler;
 pub mod seed;
+pub mod sensor;
+pub mod table;
 #[cfg(test)]
 mod test_scenes;
 
 pub use contract::InputContract;
 pub use crop::{CropParams, crop_depth};
-pub use depth_image::{DepthImage, View, theta_rad};
+pub use depth_image::{DepthImage, Mask, View, theta_rad};
 pub use error::{PlannerError, Result};
 pub use hand_check::{Rejection, Rejections, check_hand};
 pub use models::{ShippedModel, ViewSetting};
 pub use policy::{GqcnnPolicy, Plan, ScoredGrasp};
 pub use sampler::{ImageSamplerParams, sample_image_grasps};
+pub use sensor::{SensorDepth, read_depth, read_mask};
+pub use table::{TableFit, TableFitParams, fit_table, objects_above};
