@@ -12,3 +12,4 @@ mod grasp_dataset;
 mod layering;
 mod plan;
 mod render_depth;
+mod sensor_depth;

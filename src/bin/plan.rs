@@ -6,17 +6,25 @@
 //! views (the first top-down) and returns the best over all of them. The default is the one
 //! whose grasps held most often in physics (models/README.md).
 //!
-//! Depth comes from the renderer today; the Learnt Stereo Machine's depth from RGB takes its
-//! place when it lands.
+//! `--depth FILE --intrinsics FILE [--camera-pose FILE] [--mask FILE]` plans on a sensor's
+//! depth image instead: the table is fitted in the image (the world is put on it when the
+//! camera's pose is not given), the object is the mask's pixels or what stands on the table,
+//! and nothing is simulated (there is no mesh).
+//!
+//! Rendered depth stands in for RGB today; the Learnt Stereo Machine's depth from RGB takes
+//! its place when it lands.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::Parser;
 use mvgrasp::cli::ObjectArgs;
 use mvgrasp::geometry::{Intrinsics, IntrinsicsPreset};
 use mvgrasp::infer::Gqcnn;
-use mvgrasp::planner::{GqcnnPolicy, PlanParams, PlanReport, ViewSetting, models, plan_grasp};
+use mvgrasp::planner::{
+    GqcnnPolicy, ObjectSource, PlanParams, PlanReport, SensorFiles, SensorPlanParams,
+    SensorPlanReport, ViewSetting, models, plan_grasp, plan_on_sensor_depth,
+};
 use mvgrasp::render::{Backend, Renderer};
 use mvgrasp::{ObjectReport, ReportParams};
 use serde::Serialize;
@@ -59,6 +67,23 @@ struct Args {
     /// Print the full report as JSON on stdout instead of the summary.
     #[arg(long)]
     json: bool,
+    /// Plan on a sensor's depth image instead of rendering one: `.npy` float32 metres, shape
+    /// (H, W) or (H, W, 1), or a 16-bit PNG in millimetres; NaN, infinities and 0 are missing.
+    #[arg(long, requires = "intrinsics", conflicts_with_all = ["mesh", "views", "distance_m", "stable_pose"])]
+    depth: Option<PathBuf>,
+    /// With --depth: the camera's intrinsics, a Berkeley `.intr` or a JSON with `K` (3x3),
+    /// `width` and `height`.
+    #[arg(long, requires = "depth")]
+    intrinsics: Option<PathBuf>,
+    /// With --depth: the camera's pose, a Berkeley `.tf` (camera to world) or a JSON with a
+    /// 4x4 `world_from_camera`. Without it the world frame is put on the table fitted in the
+    /// image.
+    #[arg(long, requires = "depth")]
+    camera_pose: Option<PathBuf>,
+    /// With --depth: the object's mask, a PNG whose non-zero pixels are the object (both
+    /// contacts must lie on it). Without it the object is what stands on the table.
+    #[arg(long, requires = "depth")]
+    mask: Option<PathBuf>,
 }
 
 fn main() -> ExitCode {
@@ -73,6 +98,9 @@ struct Report<'a> {
 }
 
 fn run(args: &Args) -> Result<(), String> {
+    if let Some(depth) = &args.depth {
+        return run_on_sensor_depth(args, depth);
+    }
     if args.views == Some(0) {
         return Err("--views: at least 1".into());
     }
@@ -137,6 +165,155 @@ fn run(args: &Args) -> Result<(), String> {
         );
     }
     Ok(())
+}
+
+/// `plan --depth`: a grasp on a sensor's depth image.
+fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<(), String> {
+    let (model_name, net) = load_model(&args.model)?;
+    let gripper = PlanParams::default()
+        .labels
+        .gripper()
+        .map_err(|e| e.to_string())?;
+    let policy = GqcnnPolicy::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
+    let files = SensorFiles {
+        depth: depth.to_path_buf(),
+        intrinsics: args.intrinsics.clone().unwrap_or_default(),
+        camera_pose: args.camera_pose.clone(),
+        mask: args.mask.clone(),
+    };
+    let params = SensorPlanParams {
+        hand_check: !args.no_hand_check,
+        seed: args.object.seed,
+        ..Default::default()
+    };
+    let report =
+        plan_on_sensor_depth(&policy, &gripper, &files, &params).map_err(|e| e.to_string())?;
+    if args.json {
+        #[derive(Serialize)]
+        struct Out<'a> {
+            depth: &'a Path,
+            model: &'a str,
+            plan: &'a SensorPlanReport,
+        }
+        let out = Out {
+            depth,
+            model: &model_name,
+            plan: &report,
+        };
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
+        );
+    } else {
+        print!("{}", sensor_summary(&model_name, &files, &report));
+    }
+    Ok(())
+}
+
+fn sensor_summary(model: &str, files: &SensorFiles, r: &SensorPlanReport) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let k = &r.camera.intrinsics;
+    let _ = writeln!(
+        s,
+        "depth: {} ({} x {}, fx {:.1}, fy {:.1} from {})",
+        files.depth.display(),
+        k.width,
+        k.height,
+        k.fx,
+        k.fy,
+        files.intrinsics.display()
+    );
+    let t = &r.table;
+    let _ = writeln!(
+        s,
+        "table: fitted in the image, {:.1}% of {} points within 4 mm (rms {:.1} mm); the camera \
+         {:.2} m above it, {:.1} deg from level",
+        100.0 * t.inlier_share,
+        t.points,
+        1000.0 * t.rms_residual_m,
+        t.camera_height_m,
+        r.camera_elevation_deg
+    );
+    let _ = writeln!(
+        s,
+        "camera pose: {}",
+        match &files.camera_pose {
+            Some(path) => format!("from {}", path.display()),
+            None => "estimated: the world frame is on the fitted table, z up".into(),
+        }
+    );
+    let _ = writeln!(
+        s,
+        "object: {} pixels {}",
+        r.object_pixels,
+        match (r.object, &files.mask) {
+            (ObjectSource::MaskFile, Some(path)) => format!("of the mask {}", path.display()),
+            _ => "standing on the table (no mask)".into(),
+        }
+    );
+    let _ = writeln!(s, "plan: {model}, {} candidates", r.candidates);
+    let rej = &r.rejections;
+    let reasons = format!(
+        "the open hand meets observed depth ({}), contacts off the observed surface ({}), \
+         contacts off the object ({})",
+        rej.hand_meets_observed_depth, rej.contact_off_surface, rej.contact_off_object
+    );
+    let Some(best) = &r.best else {
+        if rej.total() > 0 {
+            let _ = writeln!(s, "no grasp: every candidate was rejected: {reasons}");
+        } else {
+            let _ = writeln!(
+                s,
+                "no grasp: no antipodal candidate the gripper fits on the object"
+            );
+        }
+        return s;
+    };
+    if rej.total() > 0 {
+        let _ = writeln!(
+            s,
+            "rejected {} candidates before the best: {reasons}",
+            rej.total()
+        );
+    }
+    let g = &best.image;
+    let _ = writeln!(
+        s,
+        "best grasp: quality {:.3}, width {:.1} cm, centre ({:.1}, {:.1}) px at depth {:.3} m, \
+         axis {:.1} deg in the image",
+        best.quality,
+        100.0 * g.width_m,
+        g.center_px[0],
+        g.center_px[1],
+        g.depth_m,
+        g.angle_rad.to_degrees()
+    );
+    let c = r
+        .camera
+        .camera_from_world()
+        .transform_point(best.grasp.center());
+    let p = best.grasp.center();
+    let paper = best.grasp.to_paper();
+    let _ = writeln!(
+        s,
+        "  centre in the camera frame ({:+.3}, {:+.3}, {:+.3}) m; in the world ({:+.3}, {:+.3}, \
+         {:+.3}) m, phi {:.1} deg, theta {:.1} deg",
+        c.x,
+        c.y,
+        c.z,
+        p.x,
+        p.y,
+        p.z,
+        paper.phi_rad.to_degrees(),
+        paper.theta_rad.to_degrees()
+    );
+    let _ = writeln!(
+        s,
+        "time: read {:.3} s, table {:.3} s, plan {:.3} s",
+        r.timings[0], r.timings[1], r.timings[2]
+    );
+    s
 }
 
 /// A shipped network by name, or an export's JSON by path.

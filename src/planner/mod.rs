@@ -3,6 +3,7 @@
 //! ([`models`]).
 
 pub mod pipeline;
+pub mod sensor;
 
 pub use mvgrasp_planner::{
     DepthImage, GqcnnPolicy, ImageSamplerParams, Plan, ScoredGrasp, ShippedModel, View,
@@ -11,4 +12,7 @@ pub use mvgrasp_planner::{
 pub use pipeline::{
     AnalyticCheck, PlanParams, PlanReport, PlanTimings, Scene, check_grasp, check_grasps,
     plan_grasp, render_scene,
+};
+pub use sensor::{
+    ObjectSource, SensorFiles, SensorPlanParams, SensorPlanReport, plan_on_sensor_depth, read_view,
 };

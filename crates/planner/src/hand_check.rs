@@ -17,6 +17,10 @@ use crate::policy::ScoredGrasp;
 /// counts an approach that comes within 0.1 mm of the object as touching it.
 const HAND_CLEARANCE_M: f32 = 0.001;
 
+/// A contact within this many pixels (along both axes) of the object's mask is on it: a depth
+/// edge lies on either side of the object's outline.
+const MASK_MARGIN_PX: u32 = 2;
+
 /// Why a candidate was rejected.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -25,6 +29,9 @@ pub enum Rejection {
     HandMeetsObservedDepth,
     /// A contact's pixel has no depth in the view the grasp was planned in.
     ContactOffSurface,
+    /// A contact's pixel is not on the object's mask (within 2 pixels) in the view the grasp
+    /// was planned in.
+    ContactOffObject,
 }
 
 /// How many candidates were rejected, by reason.
@@ -34,6 +41,8 @@ pub struct Rejections {
     pub hand_meets_observed_depth: usize,
     /// See [`Rejection::ContactOffSurface`].
     pub contact_off_surface: usize,
+    /// See [`Rejection::ContactOffObject`].
+    pub contact_off_object: usize,
 }
 
 impl Rejections {
@@ -42,12 +51,13 @@ impl Rejections {
         match rejection {
             Rejection::HandMeetsObservedDepth => self.hand_meets_observed_depth += 1,
             Rejection::ContactOffSurface => self.contact_off_surface += 1,
+            Rejection::ContactOffObject => self.contact_off_object += 1,
         }
     }
 
     /// All of them.
     pub fn total(&self) -> usize {
-        self.hand_meets_observed_depth + self.contact_off_surface
+        self.hand_meets_observed_depth + self.contact_off_surface + self.contact_off_object
     }
 }
 
@@ -55,10 +65,19 @@ impl Rejections {
 /// `gripper`'s boxes, open for the candidate's width ([`Gripper::opening_for`]), swept back
 /// along -z by its approach distance.
 pub fn check_hand(candidate: &ScoredGrasp, views: &[View], gripper: &Gripper) -> Option<Rejection> {
-    if let Some(view) = views.get(candidate.view)
-        && !contacts_observed(candidate, view)
-    {
-        return Some(Rejection::ContactOffSurface);
+    if let Some(view) = views.get(candidate.view) {
+        let contacts = contact_pixels(candidate, view);
+        if !contacts.iter().all(|&[u, v]| view.depth.at(u, v) > 0.0) {
+            return Some(Rejection::ContactOffSurface);
+        }
+        if let Some(mask) = &view.mask {
+            let r = i64::from(MASK_MARGIN_PX);
+            let on_object =
+                |[u, v]: [i64; 2]| (v - r..=v + r).any(|y| (u - r..=u + r).any(|x| mask.at(x, y)));
+            if !contacts.iter().all(|&c| on_object(c)) {
+                return Some(Rejection::ContactOffObject);
+            }
+        }
     }
     let hand = HandShapes::new(
         gripper,
@@ -72,21 +91,24 @@ pub fn check_hand(candidate: &ScoredGrasp, views: &[View], gripper: &Gripper) ->
         .then_some(Rejection::HandMeetsObservedDepth)
 }
 
-/// Whether both contact pixels (the grasp's width apart along its axis, at its depth) have
-/// depth.
-fn contacts_observed(candidate: &ScoredGrasp, view: &View) -> bool {
+/// The two contact pixels: the grasp's width apart along its axis, at its depth (none for a
+/// grasp at no depth).
+fn contact_pixels(candidate: &ScoredGrasp, view: &View) -> Vec<[i64; 2]> {
     let image = &candidate.image;
     let k = view.depth.intrinsics();
     if image.depth_m <= 0.0 {
-        return false;
+        return vec![[-1, -1]];
     }
     let half_px = image.width_m / 2.0 * k.fx / image.depth_m;
     let (sin, cos) = image.angle_rad.sin_cos();
-    [-1.0f32, 1.0].iter().all(|side| {
-        let u = image.center_px[0] + side * half_px * cos;
-        let v = image.center_px[1] + side * half_px * sin;
-        view.depth.at(u.round() as i64, v.round() as i64) > 0.0
-    })
+    [-1.0f32, 1.0]
+        .iter()
+        .map(|side| {
+            let u = image.center_px[0] + side * half_px * cos;
+            let v = image.center_px[1] + side * half_px * sin;
+            [u.round() as i64, v.round() as i64]
+        })
+        .collect()
 }
 
 /// Whether a point `view` observed lies inside one of the hand's boxes grown by
@@ -141,6 +163,7 @@ fn meets_observed_depth(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::depth_image::Mask;
     use crate::test_scenes::box_on_table;
     use mvgrasp_geometry::{Camera, Intrinsics, IntrinsicsPreset};
     use mvgrasp_grasp::ImageGrasp;
@@ -208,6 +231,38 @@ mod tests {
             check_hand(&deep, &views, &panda),
             Some(Rejection::HandMeetsObservedDepth)
         );
+    }
+
+    #[test]
+    fn contacts_must_lie_on_the_objects_mask() {
+        let view = scene(false);
+        let k = view.depth.intrinsics();
+        let across = candidate(&view, 0.0, 0.67, 0.04);
+        // A mask of the box's left half: the right contact is off it.
+        let half: Vec<bool> = (0..k.width * k.height)
+            .map(|i| {
+                let (u, v) = ((i % k.width) as f32, (i / k.width) as f32);
+                let (x, y) = ((u - k.cx) * 0.65 / k.fx, (v - k.cy) * 0.65 / k.fy);
+                (-0.021..0.0).contains(&x) && y.abs() < 0.06
+            })
+            .collect();
+        let masked = view
+            .clone()
+            .with_mask(Mask::new(k.width, k.height, half).unwrap())
+            .unwrap();
+        assert_eq!(
+            check_hand(&across, &[masked], &Gripper::default()),
+            Some(Rejection::ContactOffObject)
+        );
+        // The whole box: both on it.
+        let whole: Vec<bool> = (0..k.width * k.height)
+            .map(|i| view.depth.as_slice()[i as usize] < 0.68)
+            .collect();
+        let masked = view
+            .clone()
+            .with_mask(Mask::new(k.width, k.height, whole).unwrap())
+            .unwrap();
+        assert_eq!(check_hand(&across, &[masked], &Gripper::default()), None);
     }
 
     #[test]

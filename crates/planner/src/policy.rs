@@ -149,7 +149,13 @@ impl GqcnnPolicy {
 
     /// The scored candidates of one view, in sampling order.
     fn score_view(&self, index: usize, view: &View, seed: u64) -> Result<Vec<ScoredGrasp>> {
-        let grasps = sample_image_grasps(&view.depth, self.max_width_m, &self.sampler, seed);
+        let grasps = sample_image_grasps(
+            &view.depth,
+            view.mask.as_ref(),
+            self.max_width_m,
+            &self.sampler,
+            seed,
+        );
         let quality = self.score(view, &grasps)?;
         let theta = view.theta_rad();
         Ok(grasps

@@ -14,7 +14,7 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::depth_image::DepthImage;
+use crate::depth_image::{DepthImage, Mask};
 
 /// Parameters of [`sample_image_grasps`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -111,11 +111,17 @@ impl EdgeMap {
     }
 }
 
+/// Pixels of the mask's edge this close to an edge pixel count as the object's: a depth edge
+/// lies on either side of the object's outline.
+const MASK_MARGIN_PX: u32 = 2;
+
 /// Grasp candidates in `depth` for a gripper that opens `max_width_m`; deterministic from
 /// `seed`. An image with no edges gives none. Missing pixels (0) are never edges: an edge
-/// needs all four neighbours seen.
+/// needs all four neighbours seen. With a `mask`, only edges on the object (within
+/// 2 pixels of it) start or end a candidate.
 pub fn sample_image_grasps(
     depth: &DepthImage,
+    mask: Option<&Mask>,
     max_width_m: f32,
     params: &ImageSamplerParams,
     seed: u64,
@@ -125,7 +131,15 @@ pub fn sample_image_grasps(
     if depth.width() < 3 || depth.height() < 3 {
         return Vec::new();
     }
-    let edges = EdgeMap::new(depth, params.edge_threshold_m);
+    let mut edges = EdgeMap::new(depth, params.edge_threshold_m);
+    if let Some(mask) = mask {
+        let near = mask.dilated(MASK_MARGIN_PX);
+        for (i, normal) in edges.normals.iter_mut().enumerate() {
+            if !near.at((i % w) as i64, (i / w) as i64) {
+                *normal = None;
+            }
+        }
+    }
     let mut pixels = edges.pixels();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let cone = params.friction_coef.atan();
@@ -238,7 +252,7 @@ mod tests {
     #[test]
     fn grasps_on_a_box_close_across_its_narrow_side() {
         let (depth, k) = box_image();
-        let grasps = sample_image_grasps(&depth, 0.08, &ImageSamplerParams::default(), 7);
+        let grasps = sample_image_grasps(&depth, None, 0.08, &ImageSamplerParams::default(), 7);
         assert!(grasps.len() >= 30, "{} candidates", grasps.len());
         for g in &grasps {
             // Across the 4 cm side (the 12 cm side is wider than the gripper): the axis is
@@ -259,17 +273,50 @@ mod tests {
         let (depth, k) = box_image();
         let params = ImageSamplerParams::default();
         assert_eq!(
-            sample_image_grasps(&depth, 0.08, &params, 3),
-            sample_image_grasps(&depth, 0.08, &params, 3)
+            sample_image_grasps(&depth, None, 0.08, &params, 3),
+            sample_image_grasps(&depth, None, 0.08, &params, 3)
         );
         let flat = DepthImage::new(k, vec![0.7f32; depth.as_slice().len()]).unwrap();
-        assert!(sample_image_grasps(&flat, 0.08, &params, 3).is_empty());
+        assert!(sample_image_grasps(&flat, None, 0.08, &params, 3).is_empty());
+    }
+
+    #[test]
+    fn a_mask_keeps_the_candidates_on_the_object() {
+        // Two 4 cm boxes side by side, 10 cm apart; the mask covers the left one.
+        let k = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
+        let (w, h) = (k.width as usize, k.height as usize);
+        let x_of = |u: usize| (u as f32 - k.cx) * 0.65 / k.fx;
+        let y_of = |v: usize| (v as f32 - k.cy) * 0.65 / k.fy;
+        let on_box = |x: f32, y: f32, cx: f32| (x - cx).abs() < 0.02 && y.abs() < 0.02;
+        let mut depth = Vec::with_capacity(w * h);
+        let mut mask = Vec::with_capacity(w * h);
+        for v in 0..h {
+            for u in 0..w {
+                let (x, y) = (x_of(u), y_of(v));
+                let left = on_box(x, y, -0.05);
+                depth.push(if left || on_box(x, y, 0.05) {
+                    0.65
+                } else {
+                    0.7
+                });
+                mask.push(left);
+            }
+        }
+        let depth = DepthImage::new(k, depth).unwrap();
+        let mask = Mask::new(k.width, k.height, mask).unwrap();
+        let params = ImageSamplerParams::default();
+        let all = sample_image_grasps(&depth, None, 0.08, &params, 5);
+        let left_x = |g: &ImageGrasp| x_of(g.center_px[0].round() as usize) < 0.0;
+        assert!(all.iter().any(left_x) && !all.iter().all(left_x));
+        let masked = sample_image_grasps(&depth, Some(&mask), 0.08, &params, 5);
+        assert!(masked.len() >= 30, "{} candidates", masked.len());
+        assert!(masked.iter().all(left_x));
     }
 
     #[test]
     fn a_box_wider_than_the_gripper_has_no_grasp() {
         let (depth, _) = box_image();
         let params = ImageSamplerParams::default();
-        assert!(sample_image_grasps(&depth, 0.03, &params, 1).is_empty());
+        assert!(sample_image_grasps(&depth, None, 0.03, &params, 1).is_empty());
     }
 }

@@ -1,0 +1,158 @@
+//! Planning on real sensor depth: gqcnn's ten single-object Primesense images, with and
+//! without their masks, the camera's pose withheld; and the errors of bad sensor files.
+
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // tests may fail loudly
+
+use std::path::Path;
+use std::process::Command;
+
+use mvgrasp::geometry::Vec3;
+use mvgrasp::planner::{
+    GqcnnPolicy, PlanParams, SensorFiles, SensorPlanParams, models, plan_on_sensor_depth, read_view,
+};
+
+use crate::shared_data::shared_data;
+
+/// How far the grasp's centre lies from the object, in the table plane: the distance from it
+/// to the nearest of the mask's points, both projected onto the table, metres.
+fn distance_to_object(
+    files: &SensorFiles,
+    camera: &mvgrasp::geometry::Camera,
+    centre: Vec3,
+) -> f32 {
+    let view = read_view(files).unwrap();
+    let mask = view.mask.as_ref().unwrap();
+    let k = view.depth.intrinsics();
+    let mut nearest = f32::INFINITY;
+    for v in 0..k.height {
+        for u in 0..k.width {
+            let d = view.depth.at(i64::from(u), i64::from(v));
+            if d > 0.0 && mask.at(i64::from(u), i64::from(v)) {
+                let p = camera.unproject(u as f32, v as f32, d);
+                nearest = nearest.min((p.x - centre.x).hypot(p.y - centre.y));
+            }
+        }
+    }
+    nearest
+}
+
+#[test]
+fn a_grasp_on_each_real_single_object_image_with_and_without_its_mask() {
+    let Some(root) = shared_data("real_depth/gqcnn/data") else {
+        return;
+    };
+    let images = root.join("examples/single_object/primesense");
+    let intrinsics = root.join("calib/primesense/primesense.intr");
+    let gripper = PlanParams::default().labels.gripper().unwrap();
+    let policy =
+        GqcnnPolicy::new(models::GQCNN_TOPDOWN.load().unwrap(), gripper.max_opening_m).unwrap();
+    let params = SensorPlanParams::default();
+    for i in 0..10 {
+        let mask = images.join(format!("segmask_{i}.png"));
+        for with_mask in [true, false] {
+            let files = SensorFiles {
+                depth: images.join(format!("depth_{i}.npy")),
+                intrinsics: intrinsics.clone(),
+                camera_pose: None,
+                mask: with_mask.then(|| mask.clone()),
+            };
+            let report = plan_on_sensor_depth(&policy, &gripper, &files, &params).unwrap();
+            // The table under a camera 77 degrees above it (primesense.tf's optical axis).
+            assert!(report.pose_estimated);
+            assert!(
+                (report.camera_elevation_deg - 77.3).abs() < 2.0,
+                "image {i}: {report:?}"
+            );
+            let best = report
+                .best
+                .unwrap_or_else(|| panic!("image {i}, mask {with_mask}: no grasp: {report:?}"));
+            let judged = SensorFiles {
+                mask: Some(mask.clone()),
+                ..files
+            };
+            let off = distance_to_object(&judged, &report.camera, best.grasp.center());
+            assert!(
+                off < 0.015,
+                "image {i}, mask {with_mask}: the grasp's centre is {:.1} cm from the object",
+                off * 100.0
+            );
+        }
+    }
+}
+
+/// A 16-bit millimetre depth PNG of `width` x `height` pixels all at `value_mm`.
+fn write_depth_png(path: &Path, width: u32, height: u32, value_mm: u16) {
+    let file = std::fs::File::create(path).unwrap();
+    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
+    encoder.set_color(png::ColorType::Grayscale);
+    encoder.set_depth(png::BitDepth::Sixteen);
+    let data: Vec<u8> = (0..width * height)
+        .flat_map(|_| value_mm.to_be_bytes())
+        .collect();
+    encoder
+        .write_header()
+        .unwrap()
+        .write_image_data(&data)
+        .unwrap();
+}
+
+#[test]
+fn bad_sensor_files_are_one_clear_line_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let depth = dir.path().join("depth.png");
+    let intr = dir.path().join("camera.json");
+    std::fs::write(
+        &intr,
+        r#"{"K": [[525, 0, 319.5], [0, 525, 239.5], [0, 0, 1]], "width": 640, "height": 480}"#,
+    )
+    .unwrap();
+    let plan = |extra: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_plan"))
+            .args(["--depth", depth.to_str().unwrap()])
+            .args(["--intrinsics", intr.to_str().unwrap()])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(!out.status.success());
+        let err = String::from_utf8(out.stderr).unwrap();
+        assert!(!err.contains("panicked"), "{err}");
+        err
+    };
+    // Intrinsics for another size.
+    write_depth_png(&depth, 320, 240, 700);
+    let err = plan(&[]);
+    assert!(
+        err.contains("camera.json") && err.contains("640 x 480") && err.contains("320 x 240"),
+        "{err}"
+    );
+    // A flat table with nothing on it; all missing; a mask of the wrong size.
+    write_depth_png(&depth, 640, 480, 700);
+    assert!(
+        plan(&[]).contains("nothing stands on the table"),
+        "{}",
+        plan(&[])
+    );
+    let mask = dir.path().join("mask.png");
+    write_depth_png(&mask, 64, 48, 1);
+    let err = plan(&["--mask", mask.to_str().unwrap()]);
+    assert!(err.contains("mask.png") && err.contains("64 x 48"), "{err}");
+    write_depth_png(&depth, 640, 480, 0);
+    let err = plan(&[]);
+    assert!(
+        err.contains("depth.png") && err.contains("no valid depth"),
+        "{err}"
+    );
+    // A pose that is not rigid.
+    write_depth_png(&depth, 640, 480, 700);
+    let pose = dir.path().join("pose.json");
+    std::fs::write(
+        &pose,
+        r#"{"world_from_camera": [[2, 0, 0, 0], [0, -1, 0, 0], [0, 0, -1, 0.7], [0, 0, 0, 1]]}"#,
+    )
+    .unwrap();
+    let err = plan(&["--camera-pose", pose.to_str().unwrap()]);
+    assert!(
+        err.contains("pose.json") && err.contains("not a rigid transform"),
+        "{err}"
+    );
+}
