@@ -80,6 +80,62 @@ fn a_grasp_on_each_real_single_object_image_with_and_without_its_mask() {
     }
 }
 
+#[test]
+fn a_grasp_on_some_object_in_each_real_clutter_image_with_and_without_the_camera_pose() {
+    let Some(root) = shared_data("real_depth/gqcnn/data") else {
+        return;
+    };
+    let gripper = PlanParams::default().labels.gripper().unwrap();
+    let policy =
+        GqcnnPolicy::new(models::GQCNN_TOPDOWN.load().unwrap(), gripper.max_opening_m).unwrap();
+    let params = SensorPlanParams::default();
+    // (folder, images, intrinsics, camera pose)
+    let sets = [
+        (
+            "examples/clutter/phoxi/dex-net_4.0",
+            5,
+            "calib/phoxi/phoxi.intr",
+            "calib/phoxi/phoxi_to_world.tf",
+        ),
+        (
+            "examples/clutter/phoxi/fcgqcnn",
+            5,
+            "calib/phoxi/phoxi.intr",
+            "calib/phoxi/phoxi_to_world.tf",
+        ),
+        (
+            "examples/clutter/primesense",
+            5,
+            "calib/primesense/primesense.intr",
+            "calib/primesense/primesense.tf",
+        ),
+    ];
+    for (folder, count, intrinsics, pose) in sets {
+        for i in 0..count {
+            let mask = root.join(folder).join(format!("segmask_{i}.png"));
+            for with_pose in [true, false] {
+                let files = SensorFiles {
+                    depth: root.join(folder).join(format!("depth_{i}.npy")),
+                    intrinsics: root.join(intrinsics),
+                    camera_pose: with_pose.then(|| root.join(pose)),
+                    mask: Some(mask.clone()),
+                };
+                let report = plan_on_sensor_depth(&policy, &gripper, &files, &params).unwrap();
+                let best = report.best.unwrap_or_else(|| {
+                    panic!("{folder} {i}, pose {with_pose}: no grasp: {report:?}")
+                });
+                let off = distance_to_object(&files, &report.camera, best.grasp.center());
+                assert!(
+                    off < 0.015,
+                    "{folder} {i}, pose {with_pose}: the grasp's centre is {:.1} cm from the \
+                     objects",
+                    off * 100.0
+                );
+            }
+        }
+    }
+}
+
 /// A 16-bit millimetre depth PNG of `width` x `height` pixels all at `value_mm`.
 fn write_depth_png(path: &Path, width: u32, height: u32, value_mm: u16) {
     let file = std::fs::File::create(path).unwrap();
