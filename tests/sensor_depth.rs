@@ -6,7 +6,9 @@
 use std::path::Path;
 use std::process::Command;
 
-use mvgrasp::geometry::Vec3;
+use mvgrasp::geometry::objects::{Category, generate as generate_object};
+use mvgrasp::geometry::{Camera, Intrinsics, IntrinsicsPreset, RestingPoses, Vec3};
+use mvgrasp::grasp_dataset::render_depths;
 use mvgrasp::planner::{
     GqcnnPolicy, PlanParams, SensorFiles, SensorPlanParams, models, plan_on_sensor_depth, read_view,
 };
@@ -134,6 +136,101 @@ fn a_grasp_on_some_object_in_each_real_clutter_image_with_and_without_the_camera
             }
         }
     }
+}
+
+#[test]
+fn oblique_rendered_views_find_the_table_and_a_grasp_with_the_pose_withheld() {
+    let Some(renderer) = crate::common::renderer() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let k = Intrinsics::preset(IntrinsicsPreset::Primesense);
+    let intrinsics = dir.path().join("camera.json");
+    std::fs::write(
+        &intrinsics,
+        format!(
+            r#"{{"K": [[{}, 0, {}], [0, {}, {}], [0, 0, 1]], "width": {}, "height": {}}}"#,
+            k.fx, k.cx, k.fy, k.cy, k.width, k.height
+        ),
+    )
+    .unwrap();
+    let object = generate_object(Category::Box, 0, 0).unwrap();
+    let rest = RestingPoses::of(&object.mesh).unwrap();
+    let (_, pose) = rest.get(0).unwrap();
+    let gripper = PlanParams::default().labels.gripper().unwrap();
+    // The multi-view GQ-CNN: trained on views 10 to 90 degrees above the table.
+    let policy = GqcnnPolicy::new(models::MVGQCNN.load().unwrap(), gripper.max_opening_m).unwrap();
+    for elevation_deg in [20.0f32, 35.0, 50.0, 65.0, 80.0] {
+        let e = elevation_deg.to_radians();
+        let eye = Vec3::new(0.65 * e.cos() * 0.8, 0.65 * e.cos() * 0.6, 0.65 * e.sin());
+        let camera = Camera::look_at(k, eye, Vec3::ZERO, Vec3::Z).unwrap();
+        let depth = render_depths(&renderer, &object.mesh, &pose.table_from_object, &[camera])
+            .unwrap()
+            .remove(0);
+        let path = dir.path().join("depth.png");
+        write_depth_png_values(&path, k.width, k.height, depth.as_slice());
+        let files = SensorFiles {
+            depth: path,
+            intrinsics: intrinsics.clone(),
+            camera_pose: None,
+            mask: None,
+        };
+        let report =
+            plan_on_sensor_depth(&policy, &gripper, &files, &SensorPlanParams::default()).unwrap();
+        // The table: its normal in the camera frame against the truth.
+        let truth = camera.world_from_camera.rotation.inverse() * Vec3::Z;
+        let error_deg = report.table.up().angle_between(truth).to_degrees();
+        assert!(
+            error_deg < 2.0,
+            "{elevation_deg} deg: the table is {error_deg} deg off"
+        );
+        assert!(
+            (report.camera_elevation_deg - elevation_deg).abs() < 2.0,
+            "{report:?}"
+        );
+        // A grasp on the box: its centre, taken back to the true world, within 1.5 cm of the
+        // box's points seen (those above the table) in the table plane.
+        let best = report
+            .best
+            .unwrap_or_else(|| panic!("{elevation_deg} deg: no grasp: {report:?}"));
+        let in_camera = report
+            .camera
+            .camera_from_world()
+            .transform_point(best.grasp.center());
+        let centre = camera.world_from_camera.transform_point(in_camera);
+        let mut nearest = f32::INFINITY;
+        for v in 0..k.height {
+            for u in 0..k.width {
+                let d = depth.at(i64::from(u), i64::from(v));
+                let p = camera.unproject(u as f32, v as f32, d);
+                if d > 0.0 && p.z > 0.005 {
+                    nearest = nearest.min((p.x - centre.x).hypot(p.y - centre.y));
+                }
+            }
+        }
+        assert!(
+            nearest < 0.015,
+            "{elevation_deg} deg: the grasp's centre is {:.1} cm from the box",
+            nearest * 100.0
+        );
+    }
+}
+
+/// A 16-bit millimetre depth PNG of `values` (metres).
+fn write_depth_png_values(path: &Path, width: u32, height: u32, values: &[f32]) {
+    let file = std::fs::File::create(path).unwrap();
+    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
+    encoder.set_color(png::ColorType::Grayscale);
+    encoder.set_depth(png::BitDepth::Sixteen);
+    let data: Vec<u8> = values
+        .iter()
+        .flat_map(|&d| ((d * 1000.0).round() as u16).to_be_bytes())
+        .collect();
+    encoder
+        .write_header()
+        .unwrap()
+        .write_image_data(&data)
+        .unwrap();
 }
 
 /// A 16-bit millimetre depth PNG of `width` x `height` pixels all at `value_mm`.

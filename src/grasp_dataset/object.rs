@@ -212,8 +212,12 @@ fn aligned_frame(
     Some(canonical_frame(axis.center, x, z.dot(y0).atan2(z.dot(z0))))
 }
 
-/// Depth images of `mesh` at `table_from_object` on a table, one per camera.
-pub(crate) fn render_depths(
+/// Depth images of `mesh` at `table_from_object` on a table (3 m square, its top at z = 0),
+/// one per camera.
+///
+/// # Errors
+/// A renderer error.
+pub fn render_depths(
     renderer: &Renderer,
     mesh: &TriangleMesh,
     table_from_object: &Pose3,
