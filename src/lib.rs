@@ -14,6 +14,7 @@ pub mod dataset;
 pub mod error;
 pub mod grasp_dataset;
 pub mod grasp_image;
+pub mod grasps_file;
 pub mod planner;
 pub mod report;
 

@@ -98,8 +98,10 @@ fn plan_says_why_it_returns_no_grasp() {
         "--views",
         "4",
     ]);
-    assert!(
-        out.status.success(),
+    // No grasp is a result, not an error: exit code 3.
+    assert_eq!(
+        out.status.code(),
+        Some(3),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );

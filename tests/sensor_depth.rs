@@ -249,6 +249,97 @@ fn write_depth_png(path: &Path, width: u32, height: u32, value_mm: u16) {
         .unwrap();
 }
 
+/// The CLI on a synthetic sensor image (a 4 x 4 x 5 cm box on a table 0.7 m below a camera
+/// looking straight down): `--out` writes `grasps.json` and the overlay, `--json` prints the
+/// same file, and a scene with no feasible grasp exits with code 3, its outputs written.
+#[test]
+fn plan_on_depth_writes_grasps_json_and_an_overlay() {
+    let dir = tempfile::tempdir().unwrap();
+    let k = Intrinsics::preset(IntrinsicsPreset::Primesense);
+    let intrinsics = dir.path().join("camera.json");
+    std::fs::write(
+        &intrinsics,
+        r#"{"K": [[525, 0, 319.5], [0, 525, 239.5], [0, 0, 1]], "width": 640, "height": 480}"#,
+    )
+    .unwrap();
+    let scene = |half_m: f32| -> Vec<f32> {
+        (0..k.width * k.height)
+            .map(|i| {
+                let (u, v) = ((i % k.width) as f32, (i / k.width) as f32);
+                let (x, y) = ((u - k.cx) * 0.65 / k.fx, (v - k.cy) * 0.65 / k.fy);
+                if x.abs() < half_m && y.abs() < half_m {
+                    0.65
+                } else {
+                    0.7
+                }
+            })
+            .collect()
+    };
+    let depth = dir.path().join("depth.png");
+    write_depth_png_values(&depth, k.width, k.height, &scene(0.02));
+    let out = dir.path().join("out");
+    let run = |extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_plan"))
+            .args(["--depth", depth.to_str().unwrap()])
+            .args(["--intrinsics", intrinsics.to_str().unwrap()])
+            .args(["--out", out.to_str().unwrap()])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let result = run(&[]);
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let text = String::from_utf8(result.stdout).unwrap();
+    assert!(text.contains("camera pose: estimated"), "{text}");
+    assert!(text.contains("best grasp: quality"), "{text}");
+    let written = std::fs::read_to_string(out.join("grasps.json")).unwrap();
+    let file: serde_json::Value = serde_json::from_str(&written).unwrap();
+    assert_eq!(file["format"], "mvgrasp-grasps/1");
+    assert_eq!(file["frame"], "estimated");
+    let best = &file["grasps"][0];
+    assert_eq!(best["rank"], 0);
+    // Across the box: 4 cm wide, its centre on the box's axis, 0.7 m below the camera at
+    // most, and the world frame on the table (the centre below the box's top, 5 cm up).
+    let width = best["width_m"].as_f64().unwrap();
+    assert!((0.035..0.05).contains(&width), "{best}");
+    let camera_from_gripper = &best["camera_from_gripper"];
+    let (x, y) = (
+        camera_from_gripper[0][3].as_f64().unwrap(),
+        camera_from_gripper[1][3].as_f64().unwrap(),
+    );
+    assert!(x.hypot(y) < 0.01, "{best}");
+    let z_world = best["world_from_gripper"][2][3].as_f64().unwrap();
+    assert!((0.0..0.05).contains(&z_world), "{best}");
+    assert_eq!(best["p"][2], best["world_from_gripper"][2][3]);
+    assert!(out.join("overlay_0.png").is_file());
+    // --json prints the same file.
+    let printed = run(&["--json"]);
+    assert!(printed.status.success());
+    assert_eq!(
+        String::from_utf8(printed.stdout).unwrap().trim(),
+        written.trim()
+    );
+    // A box wider than the gripper opens: no grasp, exit code 3, the folder still written.
+    std::fs::remove_dir_all(&out).unwrap();
+    write_depth_png_values(&depth, k.width, k.height, &scene(0.06));
+    let none = run(&[]);
+    assert_eq!(
+        none.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&none.stderr)
+    );
+    let text = String::from_utf8(none.stdout).unwrap();
+    assert!(text.contains("no grasp:"), "{text}");
+    let file: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("grasps.json")).unwrap()).unwrap();
+    assert_eq!(file["grasps"].as_array().unwrap().len(), 0);
+}
+
 #[test]
 fn bad_sensor_files_are_one_clear_line_naming_the_file() {
     let dir = tempfile::tempdir().unwrap();

@@ -20,10 +20,11 @@ use std::process::ExitCode;
 use clap::Parser;
 use mvgrasp::cli::ObjectArgs;
 use mvgrasp::geometry::{Intrinsics, IntrinsicsPreset};
+use mvgrasp::grasps_file::{GraspsFile, WorldFrame, write_overlay};
 use mvgrasp::infer::Gqcnn;
 use mvgrasp::planner::{
-    GqcnnPolicy, ObjectSource, PlanParams, PlanReport, SensorFiles, SensorPlanParams,
-    SensorPlanReport, ViewSetting, models, plan_grasp, plan_on_sensor_depth,
+    GqcnnPolicy, ObjectSource, PlanParams, PlanReport, ScoredGrasp, SensorFiles, SensorPlanParams,
+    SensorPlanReport, View, ViewSetting, models, plan_grasp, plan_on_sensor_depth, read_view,
 };
 use mvgrasp::render::{Backend, Renderer};
 use mvgrasp::{ObjectReport, ReportParams};
@@ -80,14 +81,26 @@ struct Args {
     /// image.
     #[arg(long, requires = "depth")]
     camera_pose: Option<PathBuf>,
+    /// Write `grasps.json` (the ranked grasps with their poses; README, "grasps.json") and, for
+    /// a sensor's depth, a picture of the best grasps over it (`overlay_0.png`) into this
+    /// folder.
+    #[arg(long)]
+    out: Option<PathBuf>,
     /// With --depth: the object's mask, a PNG whose non-zero pixels are the object (both
     /// contacts must lie on it). Without it the object is what stands on the table.
     #[arg(long, requires = "depth")]
     mask: Option<PathBuf>,
 }
 
+/// No grasp survived: a result, not an error (exit code 3, the outputs still written).
+const NO_GRASP: u8 = 3;
+
 fn main() -> ExitCode {
-    mvgrasp::cli::exit(run(&Args::parse()))
+    match run(&Args::parse()) {
+        Ok(true) => ExitCode::SUCCESS,
+        Ok(false) => ExitCode::from(NO_GRASP),
+        Err(message) => mvgrasp::cli::exit(Err(message)),
+    }
 }
 
 #[derive(Serialize)]
@@ -97,7 +110,8 @@ struct Report<'a> {
     plan: &'a PlanReport,
 }
 
-fn run(args: &Args) -> Result<(), String> {
+/// Plans; `Ok(false)` when no grasp was found.
+fn run(args: &Args) -> Result<bool, String> {
     if let Some(depth) = &args.depth {
         return run_on_sensor_depth(args, depth);
     }
@@ -164,11 +178,40 @@ fn run(args: &Args) -> Result<(), String> {
             summary(&model_name, policy.net(), &plan, params.views.radius_m)
         );
     }
+    if let Some(out) = &args.out {
+        let file = GraspsFile::new(
+            WorldFrame::Rendered,
+            &plan.cameras,
+            &plan.top,
+            plan.rejections,
+            None,
+        );
+        write_outputs(out, &file, &[], &[])?;
+    }
+    Ok(plan.best.is_some())
+}
+
+/// Writes `grasps.json` and, for each of `views`, a picture of `grasps` over its depth
+/// (`overlay_N.png`) into `out`.
+fn write_outputs(
+    out: &Path,
+    file: &GraspsFile,
+    views: &[View],
+    grasps: &[ScoredGrasp],
+) -> Result<(), String> {
+    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let json = file.to_json().map_err(|e| e.to_string())?;
+    let path = out.join("grasps.json");
+    std::fs::write(&path, json).map_err(|e| format!("{}: {e}", path.display()))?;
+    for (i, view) in views.iter().enumerate() {
+        let picture = out.join(format!("overlay_{i}.png"));
+        write_overlay(&picture, &view.depth, i, grasps).map_err(|e| e.to_string())?;
+    }
     Ok(())
 }
 
-/// `plan --depth`: a grasp on a sensor's depth image.
-fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<(), String> {
+/// `plan --depth`: a grasp on a sensor's depth image; `Ok(false)` when none was found.
+fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<bool, String> {
     let (model_name, net) = load_model(&args.model)?;
     let gripper = PlanParams::default()
         .labels
@@ -188,26 +231,28 @@ fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<(), String> {
     };
     let report =
         plan_on_sensor_depth(&policy, &gripper, &files, &params).map_err(|e| e.to_string())?;
+    let frame = if files.camera_pose.is_some() {
+        WorldFrame::Given
+    } else {
+        WorldFrame::Estimated
+    };
+    let file = GraspsFile::new(
+        frame,
+        &[report.camera],
+        &report.top,
+        report.rejections,
+        Some(report.table),
+    );
     if args.json {
-        #[derive(Serialize)]
-        struct Out<'a> {
-            depth: &'a Path,
-            model: &'a str,
-            plan: &'a SensorPlanReport,
-        }
-        let out = Out {
-            depth,
-            model: &model_name,
-            plan: &report,
-        };
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
-        );
+        println!("{}", file.to_json().map_err(|e| e.to_string())?);
     } else {
         print!("{}", sensor_summary(&model_name, &files, &report));
     }
-    Ok(())
+    if let Some(out) = &args.out {
+        let view = read_view(&files).map_err(|e| e.to_string())?;
+        write_outputs(out, &file, &[view], &report.top)?;
+    }
+    Ok(report.best.is_some())
 }
 
 fn sensor_summary(model: &str, files: &SensorFiles, r: &SensorPlanReport) -> String {

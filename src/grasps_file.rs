@@ -1,0 +1,261 @@
+//! `grasps.json`: the planner's ranked grasps for robots and scripts, and an overlay picture of
+//! them on each view's depth image.
+//!
+//! The file (format `mvgrasp-grasps/1`):
+//!
+//! | field | meaning |
+//! |---|---|
+//! | `format` | `"mvgrasp-grasps/1"` |
+//! | `frame` | `"given"` (the world of the camera poses given), `"estimated"` (a world on the table fitted in the image: z up, origin where the optical axis meets the table) or `"rendered"` (the table of a rendered scene) |
+//! | `views[]` | per view: `intrinsics` (fx, fy, cx, cy, width, height) and `world_from_camera` (4x4, rows) |
+//! | `grasps[]` | best first: `rank`, `view`, `quality` (the network's), `width_m`, the image grasp (`u`, `v`, `angle_rad`, `depth_m`), `camera_from_gripper` and `world_from_gripper` (4x4, rows; the gripper frame of ARCHITECTURE.md: origin midway between the fingertips, +z the approach, +x the closing axis), and the paper's `p` (metres), `phi_rad`, `theta_rad` |
+//! | `rejections` | candidates the hand check dropped before the best, by reason |
+//! | `table` | the fitted table (camera frame: `normal`, `camera_height_m`, `inlier_share`, `rms_residual_m`, `points`), when one was fitted |
+
+use std::path::Path;
+
+use mvgrasp_geometry::Camera;
+use mvgrasp_planner::{DepthImage, Rejections, ScoredGrasp, TableFit};
+use serde::Serialize;
+
+use crate::convert::row_major;
+use crate::dataset::images::write_png8;
+use crate::error::{Error, Result};
+use crate::grasp_image::GRASP_COLORS;
+
+/// The `format` of `grasps.json`.
+pub const GRASPS_FORMAT: &str = "mvgrasp-grasps/1";
+
+/// Which world the `world_from_*` poses are in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WorldFrame {
+    /// The world of the camera poses given.
+    Given,
+    /// A world on the table fitted in the image.
+    Estimated,
+    /// The table of a rendered scene.
+    Rendered,
+}
+
+/// A view's camera in `grasps.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct ViewEntry {
+    /// fx, fy, cx, cy (pixels), width, height.
+    pub intrinsics: [f32; 6],
+    /// 4x4, rows.
+    pub world_from_camera: [[f32; 4]; 4],
+}
+
+/// A grasp in `grasps.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct GraspEntry {
+    /// 0 for the best.
+    pub rank: usize,
+    /// The view it was planned in.
+    pub view: usize,
+    /// The network's probability that it is robust.
+    pub quality: f32,
+    /// Jaw opening at the contacts, metres.
+    pub width_m: f32,
+    /// The grasp centre's column, pixels.
+    pub u: f32,
+    /// Its row, pixels.
+    pub v: f32,
+    /// The closing axis in the image, from +u towards +v, radians.
+    pub angle_rad: f32,
+    /// The grasp centre's depth, metres.
+    pub depth_m: f32,
+    /// 4x4, rows: the gripper in the frame of the view's camera.
+    pub camera_from_gripper: [[f32; 4]; 4],
+    /// 4x4, rows: the gripper in the world.
+    pub world_from_gripper: [[f32; 4]; 4],
+    /// The paper's grasp centre p, metres (world).
+    pub p: [f32; 3],
+    /// The paper's phi, radians.
+    pub phi_rad: f32,
+    /// The paper's theta, radians.
+    pub theta_rad: f32,
+}
+
+/// The content of `grasps.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct GraspsFile {
+    /// [`GRASPS_FORMAT`].
+    pub format: &'static str,
+    /// Which world the poses are in.
+    pub frame: WorldFrame,
+    /// The cameras, in view order.
+    pub views: Vec<ViewEntry>,
+    /// Best first.
+    pub grasps: Vec<GraspEntry>,
+    /// Candidates the hand check dropped before the best, by reason.
+    pub rejections: Rejections,
+    /// The table fitted in the (first) view, if one was.
+    pub table: Option<TableFit>,
+}
+
+impl GraspsFile {
+    /// The file for `grasps` (best first) planned in the views of `cameras`.
+    pub fn new(
+        frame: WorldFrame,
+        cameras: &[Camera],
+        grasps: &[ScoredGrasp],
+        rejections: Rejections,
+        table: Option<TableFit>,
+    ) -> Self {
+        let views = cameras
+            .iter()
+            .map(|c| {
+                let k = &c.intrinsics;
+                ViewEntry {
+                    intrinsics: [k.fx, k.fy, k.cx, k.cy, k.width as f32, k.height as f32],
+                    world_from_camera: row_major(&c.world_from_camera),
+                }
+            })
+            .collect();
+        let grasps = grasps
+            .iter()
+            .enumerate()
+            .map(|(rank, g)| {
+                let camera_from_gripper =
+                    cameras.get(g.view).map_or(g.grasp.world_from_gripper, |c| {
+                        c.camera_from_world() * g.grasp.world_from_gripper
+                    });
+                let paper = g.grasp.to_paper();
+                GraspEntry {
+                    rank,
+                    view: g.view,
+                    quality: g.quality,
+                    width_m: g.grasp.width_m,
+                    u: g.image.center_px[0],
+                    v: g.image.center_px[1],
+                    angle_rad: g.image.angle_rad,
+                    depth_m: g.image.depth_m,
+                    camera_from_gripper: row_major(&camera_from_gripper),
+                    world_from_gripper: row_major(&g.grasp.world_from_gripper),
+                    p: g.grasp.center().to_array(),
+                    phi_rad: paper.phi_rad,
+                    theta_rad: paper.theta_rad,
+                }
+            })
+            .collect();
+        Self {
+            format: GRASPS_FORMAT,
+            frame,
+            views,
+            grasps,
+            rejections,
+            table,
+        }
+    }
+
+    /// The file as pretty JSON.
+    ///
+    /// # Errors
+    /// [`Error::Json`] (never for these types in practice).
+    pub fn to_json(&self) -> Result<String> {
+        serde_json::to_string_pretty(self).map_err(|source| Error::Json {
+            op: "write",
+            what: "grasps",
+            source,
+            path: "grasps.json".into(),
+        })
+    }
+}
+
+/// Writes a picture of `grasps` (best first) planned in the view `view` over its depth image:
+/// grey depth (near is bright, missing black), each grasp as its two jaws joined by a line, the
+/// best five in [`GRASP_COLORS`] (the best green and drawn last), the rest grey.
+///
+/// # Errors
+/// [`Error::Io`] when the PNG cannot be written.
+pub fn write_overlay(
+    path: &Path,
+    depth: &DepthImage,
+    view: usize,
+    grasps: &[ScoredGrasp],
+) -> Result<()> {
+    let (w, h) = (depth.width() as usize, depth.height() as usize);
+    let mut valid: Vec<f32> = depth
+        .as_slice()
+        .iter()
+        .copied()
+        .filter(|&d| d > 0.0)
+        .collect();
+    valid.sort_by(f32::total_cmp);
+    let at = |q: f64| {
+        valid
+            .get(((valid.len().saturating_sub(1)) as f64 * q) as usize)
+            .copied()
+    };
+    let (near, far) = (at(0.02).unwrap_or(0.0), at(0.98).unwrap_or(1.0));
+    let span = (far - near).max(1e-3);
+    let mut rgb: Vec<u8> = depth
+        .as_slice()
+        .iter()
+        .flat_map(|&d| {
+            let g = if d > 0.0 {
+                (40.0 + 200.0 * (1.0 - ((d - near) / span).clamp(0.0, 1.0))) as u8
+            } else {
+                0
+            };
+            [g, g, g]
+        })
+        .collect();
+    let k = depth.intrinsics();
+    let mut plot = |x: f32, y: f32, color: [u8; 3], thick: bool| {
+        let r = i64::from(thick);
+        for dy in -r..=r {
+            for dx in -r..=r {
+                let (u, v) = (x.round() as i64 + dx, y.round() as i64 + dy);
+                if (0..w as i64).contains(&u) && (0..h as i64).contains(&v) {
+                    let i = 3 * (v as usize * w + u as usize);
+                    rgb[i..i + 3].copy_from_slice(&color);
+                }
+            }
+        }
+    };
+    let mut line = |a: [f32; 2], b: [f32; 2], color: [u8; 3], thick: bool| {
+        let steps = (b[0] - a[0]).abs().max((b[1] - a[1]).abs()).ceil().max(1.0) as usize;
+        for s in 0..=steps {
+            let t = s as f32 / steps as f32;
+            plot(
+                a[0] + (b[0] - a[0]) * t,
+                a[1] + (b[1] - a[1]) * t,
+                color,
+                thick,
+            );
+        }
+    };
+    let in_view: Vec<(usize, &ScoredGrasp)> = grasps
+        .iter()
+        .enumerate()
+        .filter(|(_, g)| g.view == view)
+        .collect();
+    // Worst first, so that the best is drawn over the rest.
+    for &(rank, g) in in_view.iter().rev() {
+        let color = GRASP_COLORS.get(rank).copied().unwrap_or([150, 150, 150]);
+        let image = &g.image;
+        if image.depth_m <= 0.0 {
+            continue;
+        }
+        let half = image.width_m / 2.0 * k.fx / image.depth_m;
+        let jaw = 0.01 * k.fx / image.depth_m;
+        let (sin, cos) = image.angle_rad.sin_cos();
+        let [cu, cv] = image.center_px;
+        let contact = |side: f32| [cu + side * half * cos, cv + side * half * sin];
+        let (a, b) = (contact(-1.0), contact(1.0));
+        let thick = rank == 0;
+        line(a, b, color, false);
+        for c in [a, b] {
+            line(
+                [c[0] - jaw * sin, c[1] + jaw * cos],
+                [c[0] + jaw * sin, c[1] - jaw * cos],
+                color,
+                thick,
+            );
+        }
+    }
+    write_png8(path, depth.width(), depth.height(), 3, &rgb)
+}
