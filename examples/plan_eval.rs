@@ -29,7 +29,9 @@ use mvgrasp::geometry::{Intrinsics, IntrinsicsPreset, TriangleMesh, load_mesh};
 use mvgrasp::grasp::GraspObject;
 use mvgrasp::grasp::physics::FailureStage;
 use mvgrasp::infer::Gqcnn;
-use mvgrasp::planner::{GqcnnPolicy, PlanParams, ShippedModel, check_grasps, models, plan_grasp};
+use mvgrasp::planner::{
+    CemParams, GqcnnPolicy, PlanParams, ShippedModel, check_grasps, models, plan_grasp,
+};
 use mvgrasp::render::{Backend, Renderer};
 
 /// Plan with each policy on unseen objects; check the chosen grasps in physics.
@@ -72,6 +74,9 @@ struct Args {
     /// ten candidates that pass the hand check), per object.
     #[arg(long)]
     top10: bool,
+    /// Refine candidates by Dex-Net 2.0's cross-entropy method (`plan --cem`).
+    #[arg(long)]
+    cem: bool,
     /// The top-down GQ-CNN's network from this export (`NAME.json`) instead of the shipped one.
     #[arg(long)]
     gqcnn: Option<PathBuf>,
@@ -157,6 +162,7 @@ fn run(args: &Args) -> Result<(), String> {
             _ => model.load().map_err(|e| e.to_string())?,
         };
         let mut policy = GqcnnPolicy::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
+        policy.cem = args.cem.then(CemParams::default);
         if args.unscaled_crops {
             policy.contract.focal_px = params.intrinsics.fx;
         }

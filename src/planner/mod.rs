@@ -6,7 +6,7 @@ pub mod pipeline;
 pub mod sensor;
 
 pub use mvgrasp_planner::{
-    DepthImage, GqcnnPolicy, ImageSamplerParams, Plan, ScoredGrasp, ShippedModel, View,
+    CemParams, DepthImage, GqcnnPolicy, ImageSamplerParams, Plan, ScoredGrasp, ShippedModel, View,
     ViewSetting, models, sample_image_grasps,
 };
 pub use pipeline::{

@@ -1,5 +1,6 @@
 #![doc = include_str!("../README.md")]
 
+pub mod cem;
 pub mod contract;
 pub mod crop;
 pub mod depth_image;
@@ -14,6 +15,7 @@ pub mod table;
 #[cfg(test)]
 mod test_scenes;
 
+pub use cem::CemParams;
 pub use contract::InputContract;
 pub use crop::{CropParams, crop_depth};
 pub use depth_image::{DepthImage, Mask, View, theta_rad};

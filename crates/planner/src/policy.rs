@@ -7,6 +7,7 @@ use mvgrasp_infer::{Gqcnn, GqcnnWorkspace, Tensor};
 use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::cem::{self, CemParams, Mixture};
 use crate::contract::InputContract;
 use crate::crop::crop_depth;
 use crate::depth_image::View;
@@ -14,6 +15,9 @@ use crate::error::{PlannerError, Result};
 use crate::hand_check::{Rejections, check_hand};
 use crate::sampler::{ImageSamplerParams, sample_image_grasps};
 use crate::seed::splitmix;
+
+/// Salts the cross-entropy method's seed apart from the sampler's.
+const CEM_SALT: u64 = 0xce3_5eed;
 
 /// A candidate with the network's score.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -89,6 +93,9 @@ pub struct GqcnnPolicy {
     pub max_width_m: f32,
     /// Crops scored per network call.
     pub batch: usize,
+    /// Refine each view's candidates by Dex-Net 2.0's cross-entropy method; `None`: score the
+    /// sampler's candidates only.
+    pub cem: Option<CemParams>,
 }
 
 impl GqcnnPolicy {
@@ -116,6 +123,7 @@ impl GqcnnPolicy {
             contract,
             max_width_m,
             batch: 256,
+            cem: None,
         })
     }
 
@@ -147,28 +155,94 @@ impl GqcnnPolicy {
         })
     }
 
-    /// The scored candidates of one view, in sampling order.
+    /// The scored candidates of one view, in sampling order (then the cross-entropy method's,
+    /// round by round).
     fn score_view(&self, index: usize, view: &View, seed: u64) -> Result<Vec<ScoredGrasp>> {
+        let mut sampler = self.sampler.clone();
+        if let Some(cem) = &self.cem {
+            sampler.num_grasps = cem
+                .initial_samples
+                .div_ceil(sampler.depths_per_grasp.max(1));
+        }
         let grasps = sample_image_grasps(
             &view.depth,
             view.mask.as_ref(),
             self.max_width_m,
-            &self.sampler,
+            &sampler,
             seed,
         );
         let quality = self.score(view, &grasps)?;
+        let mut scored: Vec<(ImageGrasp, f32)> = grasps.into_iter().zip(quality).collect();
+        if let Some(cem) = &self.cem {
+            self.cross_entropy(view, &mut scored, cem, splitmix(seed ^ CEM_SALT))?;
+        }
         let theta = view.theta_rad();
-        Ok(grasps
-            .iter()
-            .zip(quality)
+        Ok(scored
+            .into_iter()
             .map(|(g, q)| ScoredGrasp {
                 view: index,
-                image: *g,
+                image: g,
                 grasp: g.to_world(&view.camera),
                 theta_rad: theta,
                 quality: q,
             })
             .collect())
+    }
+
+    /// Dex-Net 2.0's cross-entropy method on `scored` (the sampler's candidates): each round
+    /// fits a mixture to the best of the previous round's and scores new candidates drawn from
+    /// it, appended to `scored` (the planner then takes the best of all of them).
+    fn cross_entropy(
+        &self,
+        view: &View,
+        scored: &mut Vec<(ImageGrasp, f32)>,
+        cem: &CemParams,
+        seed: u64,
+    ) -> Result<()> {
+        let k = view.depth.intrinsics();
+        let focal = k.fx;
+        let mut rng = cem::rng(seed);
+        let mut round: Vec<(ImageGrasp, f32)> = scored.clone();
+        for _ in 0..cem.iterations {
+            round.sort_by(|a, b| b.1.total_cmp(&a.1));
+            let elite =
+                ((round.len() as f32 * cem.elite_fraction).ceil() as usize).min(round.len());
+            let points: Vec<_> = round[..elite]
+                .iter()
+                .map(|(g, _)| cem::features(g, focal))
+                .collect();
+            let components = ((elite as f32 * cem.components_fraction).round() as usize).max(1);
+            let Some(mixture) = Mixture::fit(
+                &points,
+                components,
+                cem.variance_floor,
+                cem.em_steps,
+                &mut rng,
+            ) else {
+                break;
+            };
+            let mut drawn = Vec::with_capacity(cem.samples_per_iteration);
+            for _ in 0..20 * cem.samples_per_iteration {
+                if drawn.len() >= cem.samples_per_iteration {
+                    break;
+                }
+                let g = cem::grasp_of(&mixture.sample(&mut rng), focal);
+                let [u, v] = g.center_px;
+                let inside =
+                    (0.0..k.width as f32).contains(&u) && (0.0..k.height as f32).contains(&v);
+                if inside
+                    && g.depth_m > 0.0
+                    && (self.sampler.min_width_m..=self.max_width_m).contains(&g.width_m)
+                    && view.depth.at(u.round() as i64, v.round() as i64) > 0.0
+                {
+                    drawn.push(g);
+                }
+            }
+            let quality = self.score(view, &drawn)?;
+            round = drawn.into_iter().zip(quality).collect();
+            scored.extend(round.iter().copied());
+        }
+        Ok(())
     }
 
     /// The network's probability that each grasp, in `view`'s image, is robust: its crop cut to
@@ -200,5 +274,50 @@ impl GqcnnPolicy {
             quality.extend(self.net.predict(&depth, &pose, &mut workspace)?);
         }
         Ok(quality)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::models::GQCNN_TOPDOWN;
+    use crate::test_scenes::box_on_table;
+    use mvgrasp_geometry::{Camera, Intrinsics, IntrinsicsPreset, Vec3};
+
+    fn box_view() -> View {
+        let k = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
+        let depth = box_on_table(k, [0.02, 0.06], None);
+        let camera = Camera::look_at(
+            k,
+            Vec3::new(0.0, 0.0, 0.7),
+            Vec3::ZERO,
+            Vec3::new(0.0, -1.0, 0.0),
+        )
+        .unwrap();
+        View::new(0, camera, depth).unwrap()
+    }
+
+    #[test]
+    fn the_cross_entropy_method_adds_its_rounds_and_is_deterministic() {
+        let mut policy = GqcnnPolicy::new(GQCNN_TOPDOWN.load().unwrap(), 0.08).unwrap();
+        let views = [box_view()];
+        let cem = CemParams::default();
+        policy.cem = Some(cem.clone());
+        let plan = policy.plan(&views, 4).unwrap();
+        // The sampler's 250 (rounded up to whole depth triples), then up to 3 rounds of 50.
+        let sampled = cem.initial_samples.div_ceil(3) * 3;
+        let n = plan.candidates.len();
+        assert!(n > sampled && n <= sampled + 3 * 50, "{n} candidates");
+        assert_eq!(plan.candidates, policy.plan(&views, 4).unwrap().candidates);
+        // Every drawn grasp fits the gripper and lies in the image; the best closes across the
+        // box's 4 cm side, centred on it.
+        let k = views[0].depth.intrinsics();
+        for c in &plan.candidates {
+            assert!(c.image.width_m <= 0.08 && c.image.width_m >= 0.005, "{c:?}");
+            assert!(c.image.center_px[0] >= 0.0 && c.image.center_px[0] < k.width as f32);
+        }
+        let best = plan.best().unwrap();
+        assert!((0.03..0.055).contains(&best.image.width_m), "{best:?}");
+        assert!((best.image.center_px[0] - k.cx).abs() < 10.0, "{best:?}");
     }
 }

@@ -1,0 +1,186 @@
+//! The planner's latency on real depth images, stage by stage: loading the files, fitting the
+//! table (and finding the object on it), sampling candidates, scoring them with the network,
+//! the cross-entropy method, lifting them to the world and the hand check; for 1 view and for
+//! 5 views (gqcnn's real Primesense images 0 to 4, each with its own estimated pose, planned
+//! together); the median of repeated runs, and grasps scored per second.
+//!
+//! ```text
+//! cargo run --release --example bench_plan -- [--data ../shared/data] [--runs 15]
+//! ```
+//!
+//! No peer runs beside it: gqcnn (TensorFlow 1) does not install here. Its published figures
+//! are printed as such: Dex-Net 2.0 planned in 0.8 s a view on a GPU, 2.5 s with the
+//! cross-entropy method (Mahler et al. 2017).
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use clap::Parser;
+use mvgrasp::planner::{
+    CemParams, GqcnnPolicy, PlanParams, SensorFiles, View, models, read_view, sample_image_grasps,
+};
+use mvgrasp_planner::{TableFitParams, fit_table, objects_above};
+
+#[derive(Parser, Debug)]
+#[command(about)]
+struct Args {
+    /// The shared data folder.
+    #[arg(long, default_value = "../shared/data")]
+    data: PathBuf,
+    /// Timed runs per setting (the median is reported).
+    #[arg(long, default_value_t = 15)]
+    runs: usize,
+}
+
+fn main() -> ExitCode {
+    mvgrasp::cli::exit(run(&Args::parse()))
+}
+
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
+}
+
+/// Seconds per stage of one plan over `files`.
+#[derive(Clone, Copy, Default)]
+struct Stages {
+    load: f64,
+    table: f64,
+    sample: f64,
+    network: f64,
+    plan: f64,
+    check: f64,
+    scored: usize,
+}
+
+fn plan_once(policy: &GqcnnPolicy, files: &[SensorFiles]) -> Result<Stages, String> {
+    let gripper = PlanParams::default()
+        .labels
+        .gripper()
+        .map_err(|e| e.to_string())?;
+    let mut s = Stages::default();
+    let t = Instant::now();
+    let read: Vec<View> = files
+        .iter()
+        .map(read_view)
+        .collect::<Result<_, _>>()
+        .map_err(|e| e.to_string())?;
+    s.load = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let mut views = Vec::new();
+    for view in read {
+        let table =
+            fit_table(&view.depth, None, &TableFitParams::default()).map_err(|e| e.to_string())?;
+        let objects = objects_above(&view.depth, &table, &TableFitParams::default())
+            .map_err(|e| e.to_string())?;
+        let mut view = view.with_mask(objects).map_err(|e| e.to_string())?;
+        view.camera = table
+            .camera(view.camera.intrinsics)
+            .map_err(|e| e.to_string())?;
+        views.push(view);
+    }
+    s.table = t.elapsed().as_secs_f64();
+    // Sampling and scoring on their own, view after view (for the breakdown).
+    for view in &views {
+        let t = Instant::now();
+        let grasps = sample_image_grasps(
+            &view.depth,
+            view.mask.as_ref(),
+            policy.max_width_m,
+            &policy.sampler,
+            0,
+        );
+        s.sample += t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        policy.score(view, &grasps).map_err(|e| e.to_string())?;
+        s.network += t.elapsed().as_secs_f64();
+    }
+    // The policy as `plan` runs it (views in parallel; with CEM when set), and the hand check.
+    let t = Instant::now();
+    let mut plan = policy.plan(&views, 0).map_err(|e| e.to_string())?;
+    s.plan = t.elapsed().as_secs_f64();
+    s.scored = plan.candidates.len();
+    let t = Instant::now();
+    plan.reject_colliding(&views, &gripper, 10);
+    s.check = t.elapsed().as_secs_f64();
+    Ok(s)
+}
+
+fn run(args: &Args) -> Result<(), String> {
+    let root = args.data.join("real_depth/gqcnn/data");
+    let images = root.join("examples/single_object/primesense");
+    if !images.is_dir() {
+        return Err(format!(
+            "{}: no such folder (the shared data)",
+            images.display()
+        ));
+    }
+    let files: Vec<SensorFiles> = (0..5)
+        .map(|i| SensorFiles {
+            depth: images.join(format!("depth_{i}.npy")),
+            intrinsics: root.join("calib/primesense/primesense.intr"),
+            camera_pose: None,
+            mask: None,
+        })
+        .collect();
+    let gripper = PlanParams::default()
+        .labels
+        .gripper()
+        .map_err(|e| e.to_string())?;
+    let net = models::GQCNN_TOPDOWN.load().map_err(|e| e.to_string())?;
+    let mut policy = GqcnnPolicy::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
+    println!(
+        "planner latency on real Primesense depth (640 x 480), {} threads, median of {} runs, ms",
+        rayon::current_num_threads(),
+        args.runs
+    );
+    println!(
+        "{:<34} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>9} {:>12}",
+        "setting",
+        "load",
+        "table",
+        "sample",
+        "network",
+        "plan",
+        "check",
+        "total",
+        "scored",
+        "grasps/s"
+    );
+    for cem in [false, true] {
+        policy.cem = cem.then(CemParams::default);
+        for views in [1usize, 5] {
+            let mut runs = Vec::new();
+            plan_once(&policy, &files[..views])?; // warm-up
+            for _ in 0..args.runs {
+                runs.push(plan_once(&policy, &files[..views])?);
+            }
+            let m = |f: fn(&Stages) -> f64| 1000.0 * median(runs.iter().map(f).collect());
+            let total = m(|s| s.load + s.table + s.plan + s.check);
+            let scored = runs[0].scored;
+            println!(
+                "{:<34} {:>8.1} {:>8.1} {:>8.1} {:>8.1} {:>8.1} {:>8.1} {:>8.1} {:>9} {:>12.0}",
+                format!("{views} view(s){}", if cem { ", CEM" } else { "" }),
+                m(|s| s.load),
+                m(|s| s.table),
+                m(|s| s.sample),
+                m(|s| s.network),
+                m(|s| s.plan),
+                m(|s| s.check),
+                total,
+                scored,
+                scored as f64 / (m(|s| s.plan) / 1000.0)
+            );
+        }
+    }
+    println!(
+        "(sample and network: the sampler and the network alone, view after view; plan: both as \
+         `plan` runs them, views in parallel, with the cross-entropy method when set)"
+    );
+    println!(
+        "targets: 1 view under 50 ms, 5 views under 150 ms; published, not run here: Dex-Net 2.0 \
+         0.8 s a view on a GPU, 2.5 s with the cross-entropy method"
+    );
+    Ok(())
+}
