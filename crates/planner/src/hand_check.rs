@@ -164,24 +164,9 @@ fn meets_observed_depth(
 mod tests {
     use super::*;
     use crate::depth_image::Mask;
-    use crate::test_scenes::box_on_table;
-    use mvgrasp_geometry::{Camera, Intrinsics, IntrinsicsPreset};
-    use mvgrasp_grasp::ImageGrasp;
+    use crate::test_scenes::box_view;
 
-    /// A 4 cm x 12 cm box 5 cm tall on a table, 0.7 m below a camera looking straight down,
-    /// with the table 2 cm around the box left unobserved where `hole` is set.
-    fn scene(hole: bool) -> View {
-        let k = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
-        let depth = box_on_table(k, [0.02, 0.06], hole.then_some([0.04, 0.08]));
-        let camera = Camera::look_at(
-            k,
-            Vec3::new(0.0, 0.0, 0.7),
-            Vec3::ZERO,
-            Vec3::new(0.0, -1.0, 0.0),
-        )
-        .unwrap();
-        View::new(0, camera, depth).unwrap()
-    }
+    use mvgrasp_grasp::ImageGrasp;
 
     fn candidate(view: &View, angle_rad: f32, depth_m: f32, width_m: f32) -> ScoredGrasp {
         let k = view.depth.intrinsics();
@@ -202,7 +187,7 @@ mod tests {
 
     #[test]
     fn the_open_hand_must_clear_what_the_camera_saw() {
-        let view = scene(false);
+        let view = box_view(false);
         let views = [view.clone()];
         let panda = Gripper::default();
         // Across the 4 cm side, 2 cm below the top: the open fingers (8 cm) come down on the
@@ -235,7 +220,7 @@ mod tests {
 
     #[test]
     fn contacts_must_lie_on_the_objects_mask() {
-        let view = scene(false);
+        let view = box_view(false);
         let k = view.depth.intrinsics();
         let across = candidate(&view, 0.0, 0.67, 0.04);
         // A mask of the box's left half: the right contact is off it.
@@ -267,7 +252,7 @@ mod tests {
 
     #[test]
     fn contacts_must_lie_on_observed_surface() {
-        let view = scene(true);
+        let view = box_view(true);
         // The jaws 6 cm apart: the contact pixels fall in the unobserved ring around the box.
         let off = candidate(&view, 0.0, 0.67, 0.06);
         assert_eq!(

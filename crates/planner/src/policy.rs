@@ -281,26 +281,12 @@ impl GqcnnPolicy {
 mod tests {
     use super::*;
     use crate::models::GQCNN_TOPDOWN;
-    use crate::test_scenes::box_on_table;
-    use mvgrasp_geometry::{Camera, Intrinsics, IntrinsicsPreset, Vec3};
-
-    fn box_view() -> View {
-        let k = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
-        let depth = box_on_table(k, [0.02, 0.06], None);
-        let camera = Camera::look_at(
-            k,
-            Vec3::new(0.0, 0.0, 0.7),
-            Vec3::ZERO,
-            Vec3::new(0.0, -1.0, 0.0),
-        )
-        .unwrap();
-        View::new(0, camera, depth).unwrap()
-    }
+    use crate::test_scenes::box_view;
 
     #[test]
     fn the_cross_entropy_method_adds_its_rounds_and_is_deterministic() {
         let mut policy = GqcnnPolicy::new(GQCNN_TOPDOWN.load().unwrap(), 0.08).unwrap();
-        let views = [box_view()];
+        let views = [box_view(false)];
         let cem = CemParams::default();
         policy.cem = Some(cem.clone());
         let plan = policy.plan(&views, 4).unwrap();

@@ -1,8 +1,8 @@
 //! Depth images the planner's unit tests share.
 
-use mvgrasp_geometry::Intrinsics;
+use mvgrasp_geometry::{Camera, Intrinsics, IntrinsicsPreset, Vec3};
 
-use crate::depth_image::DepthImage;
+use crate::depth_image::{DepthImage, View};
 
 /// A box `half_m` (x, y half extents, metres) and 5 cm tall on a table 0.7 m below a camera
 /// with `k` looking straight down, as that camera sees it (exact per-pixel depth). Where
@@ -30,4 +30,19 @@ pub(crate) fn box_on_table(
         }
     }
     DepthImage::new(k, depth).unwrap()
+}
+
+/// A 4 cm x 12 cm box 5 cm tall on a table, 0.7 m below a PhoXi S looking straight down
+/// ([`box_on_table`]), with the table 2 cm around the box left unobserved where `hole` is set.
+pub(crate) fn box_view(hole: bool) -> View {
+    let k = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
+    let depth = box_on_table(k, [0.02, 0.06], hole.then_some([0.04, 0.08]));
+    let camera = Camera::look_at(
+        k,
+        Vec3::new(0.0, 0.0, 0.7),
+        Vec3::ZERO,
+        Vec3::new(0.0, -1.0, 0.0),
+    )
+    .unwrap();
+    View::new(0, camera, depth).unwrap()
 }
