@@ -10,7 +10,8 @@ use mvgrasp::geometry::objects::{Category, generate as generate_object};
 use mvgrasp::geometry::{Camera, Intrinsics, IntrinsicsPreset, RestingPoses, Vec3};
 use mvgrasp::grasp_dataset::render_depths;
 use mvgrasp::planner::{
-    GqcnnPolicy, PlanParams, SensorFiles, SensorPlanParams, models, plan_on_sensor_depth, read_view,
+    GqcnnPolicy, PlanParams, SensorFiles, SensorPlanParams, models, plan_on_sensor_depth,
+    read_view, read_views_dir,
 };
 
 use crate::shared_data::shared_data;
@@ -338,6 +339,117 @@ fn plan_on_depth_writes_grasps_json_and_an_overlay() {
     let file: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("grasps.json")).unwrap()).unwrap();
     assert_eq!(file["grasps"].as_array().unwrap().len(), 0);
+}
+
+/// `plan --views-dir` on a folder `render` wrote (10 test views of a box, depth in 0.1 mm,
+/// masks 0 / 1 object / 2 table): the multi-view GQ-CNN's grasp lies on the box; and folders
+/// whose cameras and images disagree are refused.
+#[test]
+fn plan_over_a_rendered_views_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let rendered = Command::new(env!("CARGO_BIN_EXE_render"))
+        .args([
+            "--out",
+            dir.path().to_str().unwrap(),
+            "--categories",
+            "box",
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        rendered.status.success(),
+        "{}",
+        String::from_utf8_lossy(&rendered.stderr)
+    );
+    let views_dir = dir.path().join("box_000/test");
+    let out = dir.path().join("out");
+    let planned = Command::new(env!("CARGO_BIN_EXE_plan"))
+        .args(["--views-dir", views_dir.to_str().unwrap()])
+        .args([
+            "--model",
+            "gqcnn_small_multiview",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        planned.status.success(),
+        "{}",
+        String::from_utf8_lossy(&planned.stderr)
+    );
+    let file: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("grasps.json")).unwrap()).unwrap();
+    assert_eq!(file["frame"], "given");
+    assert_eq!(file["views"].as_array().unwrap().len(), 10);
+    assert!(out.join("overlay_9.png").is_file());
+    let p = &file["grasps"][0]["p"];
+    let centre = Vec3::new(
+        p[0].as_f64().unwrap() as f32,
+        p[1].as_f64().unwrap() as f32,
+        p[2].as_f64().unwrap() as f32,
+    );
+    // The box's points seen in the top-down view (its mask: value 1).
+    let views = read_views_dir(&views_dir).unwrap();
+    let top = &views[0];
+    let mask = top.mask.as_ref().unwrap();
+    let k = top.depth.intrinsics();
+    let mut nearest = f32::INFINITY;
+    for v in 0..k.height {
+        for u in 0..k.width {
+            let (ui, vi) = (i64::from(u), i64::from(v));
+            if mask.at(ui, vi) {
+                let q = top
+                    .camera
+                    .unproject(u as f32, v as f32, top.depth.at(ui, vi));
+                nearest = nearest.min((q.x - centre.x).hypot(q.y - centre.y));
+            }
+        }
+    }
+    assert!(
+        nearest < 0.015,
+        "the grasp is {:.1} cm from the box",
+        nearest * 100.0
+    );
+    // The table's pixels (mask value 2) are not the object: the masks hold the box alone.
+    assert!(
+        mask.count() < (k.width * k.height / 4) as usize,
+        "{}",
+        mask.count()
+    );
+
+    // A camera without its depth image, and a depth image without its camera.
+    let cameras_path = views_dir.join("cameras.json");
+    let cameras: Vec<serde_json::Value> =
+        serde_json::from_str(&std::fs::read_to_string(&cameras_path).unwrap()).unwrap();
+    std::fs::remove_file(views_dir.join("004_depth.png")).unwrap();
+    let err = read_views_dir(&views_dir)
+        .map(|v| v.len())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("004_depth.png") && err.contains("view 4"),
+        "{err}"
+    );
+    std::fs::write(&cameras_path, serde_json::to_string(&cameras[..3]).unwrap()).unwrap();
+    let err = read_views_dir(&views_dir)
+        .map(|v| v.len())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("003_depth.png") && err.contains("lists 3 cameras"),
+        "{err}"
+    );
+    std::fs::write(&cameras_path, "[]").unwrap();
+    let err = read_views_dir(&views_dir)
+        .map(|v| v.len())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("cameras.json") && err.contains("no camera"),
+        "{err}"
+    );
 }
 
 #[test]

@@ -25,7 +25,7 @@ use mvgrasp::infer::Gqcnn;
 use mvgrasp::planner::{
     CemParams, GqcnnPolicy, ObjectSource, PlanParams, PlanReport, ScoredGrasp, SensorFiles,
     SensorPlanParams, SensorPlanReport, View, ViewSetting, models, plan_grasp,
-    plan_on_sensor_depth, read_view,
+    plan_on_sensor_depth, plan_on_views_dir, read_view, read_views_dir,
 };
 use mvgrasp::render::{Backend, Renderer};
 use mvgrasp::{ObjectReport, ReportParams};
@@ -87,6 +87,11 @@ struct Args {
     /// image.
     #[arg(long, requires = "depth")]
     camera_pose: Option<PathBuf>,
+    /// Plan over a folder of views instead: `cameras.json` (the cameras as `render` writes
+    /// them, poses included) and per camera `NNN_depth.npy` (metres) or `NNN_depth.png`, and
+    /// optionally `NNN_mask.png`; a `render` dataset's `train` or `test` folder is one.
+    #[arg(long, conflicts_with_all = ["depth", "mesh", "views", "distance_m", "stable_pose"])]
+    views_dir: Option<PathBuf>,
     /// Write `grasps.json` (the ranked grasps with their poses; README, "grasps.json") and, for
     /// a sensor's depth, a picture of the best grasps over it (`overlay_0.png`) into this
     /// folder.
@@ -120,6 +125,9 @@ struct Report<'a> {
 fn run(args: &Args) -> Result<bool, String> {
     if let Some(depth) = &args.depth {
         return run_on_sensor_depth(args, depth);
+    }
+    if let Some(dir) = &args.views_dir {
+        return run_on_views_dir(args, dir);
     }
     if args.views == Some(0) {
         return Err("--views: at least 1".into());
@@ -217,8 +225,19 @@ fn write_outputs(
     Ok(())
 }
 
-/// `plan --depth`: a grasp on a sensor's depth image; `Ok(false)` when none was found.
-fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<bool, String> {
+/// The network, policy, gripper and settings of planning on sensor depth (`--depth`,
+/// `--views-dir`).
+fn sensor_setup(
+    args: &Args,
+) -> Result<
+    (
+        String,
+        GqcnnPolicy,
+        mvgrasp::grasp::Gripper,
+        SensorPlanParams,
+    ),
+    String,
+> {
     let (model_name, net) = load_model(&args.model)?;
     let gripper = PlanParams::default()
         .labels
@@ -226,16 +245,22 @@ fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<bool, String> {
         .map_err(|e| e.to_string())?;
     let mut policy = GqcnnPolicy::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
     policy.cem = args.cem.then(CemParams::default);
+    let params = SensorPlanParams {
+        hand_check: !args.no_hand_check,
+        seed: args.object.seed,
+        ..Default::default()
+    };
+    Ok((model_name, policy, gripper, params))
+}
+
+/// `plan --depth`: a grasp on a sensor's depth image; `Ok(false)` when none was found.
+fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<bool, String> {
+    let (model_name, policy, gripper, params) = sensor_setup(args)?;
     let files = SensorFiles {
         depth: depth.to_path_buf(),
         intrinsics: args.intrinsics.clone().unwrap_or_default(),
         camera_pose: args.camera_pose.clone(),
         mask: args.mask.clone(),
-    };
-    let params = SensorPlanParams {
-        hand_check: !args.no_hand_check,
-        seed: args.object.seed,
-        ..Default::default()
     };
     let report =
         plan_on_sensor_depth(&policy, &gripper, &files, &params).map_err(|e| e.to_string())?;
@@ -259,6 +284,89 @@ fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<bool, String> {
     if let Some(out) = &args.out {
         let view = read_view(&files).map_err(|e| e.to_string())?;
         write_outputs(out, &file, &[view], &report.top)?;
+    }
+    Ok(report.best.is_some())
+}
+
+/// `plan --views-dir`: a grasp over a folder of views; `Ok(false)` when none was found.
+fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
+    use std::fmt::Write;
+    let (model_name, policy, gripper, params) = sensor_setup(args)?;
+    let report = plan_on_views_dir(&policy, &gripper, dir, &params).map_err(|e| e.to_string())?;
+    let file = GraspsFile::new(
+        WorldFrame::Given,
+        &report.cameras,
+        &report.top,
+        report.rejections,
+        report.tables.first().copied(),
+    );
+    if args.json {
+        println!("{}", file.to_json().map_err(|e| e.to_string())?);
+    } else {
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "views: {} ({} cameras), plan: {model_name}",
+            dir.display(),
+            report.cameras.len()
+        );
+        let _ = writeln!(
+            s,
+            "   view  elevation  table inliers  object pixels  candidates  best in the top 10"
+        );
+        for (i, camera) in report.cameras.iter().enumerate() {
+            let best = report
+                .top
+                .iter()
+                .find(|c| c.view == i)
+                .map_or("-".into(), |c| format!("{:.3}", c.quality));
+            let (source, pixels) = report.objects[i];
+            let _ = writeln!(
+                s,
+                "   {i:>4}  {:>5.1} deg  {:>12.1}%  {:>8} ({})  {:>10}  {best:>18}",
+                mvgrasp::planner::theta_rad(camera).to_degrees(),
+                100.0 * report.tables[i].inlier_share,
+                pixels,
+                match source {
+                    ObjectSource::MaskFile => "mask",
+                    ObjectSource::AboveTheTable => "table",
+                },
+                report.candidates_per_view[i]
+            );
+        }
+        match &report.best {
+            Some(best) => {
+                let p = best.grasp.center();
+                let paper = best.grasp.to_paper();
+                let _ = writeln!(
+                    s,
+                    "best grasp: view {}, quality {:.3}, width {:.1} cm, p = ({:+.3}, {:+.3}, {:+.3}) m, phi {:.1} deg, theta {:.1} deg",
+                    best.view,
+                    best.quality,
+                    100.0 * best.grasp.width_m,
+                    p.x,
+                    p.y,
+                    p.z,
+                    paper.phi_rad.to_degrees(),
+                    paper.theta_rad.to_degrees()
+                );
+            }
+            None => {
+                let _ = writeln!(
+                    s,
+                    "no grasp: {} candidates rejected (the open hand meets observed depth {}, contacts off the observed surface {}, off the object {})",
+                    report.rejections.total(),
+                    report.rejections.hand_meets_observed_depth,
+                    report.rejections.contact_off_surface,
+                    report.rejections.contact_off_object
+                );
+            }
+        }
+        print!("{s}");
+    }
+    if let Some(out) = &args.out {
+        let views = read_views_dir(dir).map_err(|e| e.to_string())?;
+        write_outputs(out, &file, &views, &report.top)?;
     }
     Ok(report.best.is_some())
 }

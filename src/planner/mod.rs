@@ -7,12 +7,13 @@ pub mod sensor;
 
 pub use mvgrasp_planner::{
     CemParams, DepthImage, GqcnnPolicy, ImageSamplerParams, Plan, ScoredGrasp, ShippedModel, View,
-    ViewSetting, models, sample_image_grasps,
+    ViewSetting, models, sample_image_grasps, theta_rad,
 };
 pub use pipeline::{
     AnalyticCheck, PlanParams, PlanReport, PlanTimings, Scene, check_grasp, check_grasps,
     plan_grasp, render_scene,
 };
 pub use sensor::{
-    ObjectSource, SensorFiles, SensorPlanParams, SensorPlanReport, plan_on_sensor_depth, read_view,
+    ObjectSource, SensorFiles, SensorPlanParams, SensorPlanReport, ViewsPlanReport,
+    plan_on_sensor_depth, plan_on_views_dir, read_view, read_views_dir,
 };

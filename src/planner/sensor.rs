@@ -9,7 +9,7 @@ use std::time::Instant;
 use mvgrasp_geometry::{Camera, Intrinsics, read_camera_pose};
 use mvgrasp_planner::{
     DepthImage, GqcnnPolicy, Mask, Rejections, ScoredGrasp, TableFit, TableFitParams, View,
-    fit_table, objects_above, read_depth, read_mask,
+    fit_table, objects_above, read_depth, read_depth_in_units, read_mask, read_mask_of,
 };
 use serde::Serialize;
 
@@ -186,5 +186,152 @@ fn mismatch(path: &Path, detail: String) -> Error {
     Error::Planning(mvgrasp_planner::PlannerError::File {
         path: path.to_path_buf(),
         detail,
+    })
+}
+
+/// What [`plan_on_views_dir`] found.
+#[derive(Clone, Debug, Serialize)]
+pub struct ViewsPlanReport {
+    /// The cameras of `cameras.json`, in view order.
+    pub cameras: Vec<Camera>,
+    /// The table fitted in each view (its camera's frame).
+    pub tables: Vec<TableFit>,
+    /// Where each view's object pixels came from, and how many there are.
+    pub objects: Vec<(ObjectSource, usize)>,
+    /// Candidates sampled and scored in each view.
+    pub candidates_per_view: Vec<usize>,
+    /// The best grasp over all views that survived the hand check (against every view).
+    pub best: Option<ScoredGrasp>,
+    /// The best ten, best first.
+    pub top: Vec<ScoredGrasp>,
+    /// Candidates rejected before the best was chosen, by reason.
+    pub rejections: Rejections,
+}
+
+/// The views of a folder: `cameras.json` (a list of cameras, `intrinsics` and
+/// `world_from_camera`, as `render` writes them) and for camera `i` the depth
+/// `{i:03}_depth.npy` (metres) or `{i:03}_depth.png`, and optionally the mask
+/// `{i:03}_mask.png`. A `dataset.json` in the folder or up to two above it (a `render`
+/// dataset) gives the PNGs' depth units (`depth_png_units_per_m`) and the object's mask value
+/// (`mask_ids.object`); without one, PNG depth is in millimetres and any non-zero mask pixel is
+/// the object.
+///
+/// # Errors
+/// A missing or unreadable `cameras.json`, a camera without a depth image, a depth image or
+/// mask whose size is not its camera's, or one with no camera; each names its file.
+pub fn read_views_dir(dir: &Path) -> Result<Vec<View>> {
+    let cameras_path = dir.join("cameras.json");
+    let text = std::fs::read_to_string(&cameras_path)
+        .map_err(|e| mismatch(&cameras_path, format!("cannot read the cameras: {e}")))?;
+    let cameras: Vec<Camera> = serde_json::from_str(&text)
+        .map_err(|e| mismatch(&cameras_path, format!("not a list of cameras: {e}")))?;
+    if cameras.is_empty() {
+        return Err(mismatch(&cameras_path, "no camera".into()));
+    }
+    let manifest = [dir.to_path_buf(), dir.join(".."), dir.join("../..")]
+        .into_iter()
+        .map(|d| d.join("dataset.json"))
+        .find(|p| p.is_file())
+        .and_then(|p| std::fs::read_to_string(p).ok())
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
+    let units = manifest
+        .as_ref()
+        .and_then(|m| m["depth_png_units_per_m"].as_f64())
+        .map_or(1000.0, |u| u as f32);
+    let object_id = manifest
+        .as_ref()
+        .and_then(|m| m["mask_ids"]["object"].as_u64())
+        .and_then(|id| u8::try_from(id).ok());
+    // Depth images past the cameras' count: the folder and its cameras disagree.
+    let extra = dir.join(format!("{:03}_depth.npy", cameras.len()));
+    let extra_png = dir.join(format!("{:03}_depth.png", cameras.len()));
+    if let Some(path) = [extra, extra_png].into_iter().find(|p| p.is_file()) {
+        return Err(mismatch(
+            &path,
+            format!(
+                "{} lists {} cameras, but this is view {}",
+                cameras_path.display(),
+                cameras.len(),
+                cameras.len()
+            ),
+        ));
+    }
+    let mut views = Vec::with_capacity(cameras.len());
+    for (i, camera) in cameras.into_iter().enumerate() {
+        let npy = dir.join(format!("{i:03}_depth.npy"));
+        let png = dir.join(format!("{i:03}_depth.png"));
+        let path = if npy.is_file() { npy } else { png };
+        if !path.is_file() {
+            return Err(mismatch(
+                &path,
+                format!("view {i} of {} has no depth image", cameras_path.display()),
+            ));
+        }
+        let depth = read_depth_in_units(&path, units)?;
+        let k = camera.intrinsics;
+        if (k.width, k.height) != (depth.width, depth.height) {
+            return Err(mismatch(
+                &path,
+                format!(
+                    "{} x {} pixels, but its camera in {} is {} x {}",
+                    depth.width,
+                    depth.height,
+                    cameras_path.display(),
+                    k.width,
+                    k.height
+                ),
+            ));
+        }
+        let view = View::new(i, camera, DepthImage::new(k, depth.depth_m)?)?;
+        let mask = dir.join(format!("{i:03}_mask.png"));
+        views.push(if mask.is_file() {
+            view.with_mask(read_mask_of(&mask, k.width, k.height, object_id)?)?
+        } else {
+            view
+        });
+    }
+    Ok(views)
+}
+
+/// Plans over every view of the folder `dir` ([`read_views_dir`]; the cameras' poses are
+/// given): each view's table fitted (the object, without a mask, is what stands on it), the
+/// candidates of all views ranked together, and the hand checked against every view.
+///
+/// # Errors
+/// See [`read_views_dir`]; no table in a view, nothing on it (without a mask), or a network
+/// error.
+pub fn plan_on_views_dir(
+    policy: &GqcnnPolicy,
+    gripper: &mvgrasp_grasp::Gripper,
+    dir: &Path,
+    params: &SensorPlanParams,
+) -> Result<ViewsPlanReport> {
+    let mut views = Vec::new();
+    let mut tables = Vec::new();
+    let mut objects = Vec::new();
+    for view in read_views_dir(dir)? {
+        let table = fit_table(&view.depth, view.mask.as_ref(), &params.table)?;
+        let (source, view) = if view.mask.is_some() {
+            (ObjectSource::MaskFile, view)
+        } else {
+            let found = objects_above(&view.depth, &table, &params.table)?;
+            (ObjectSource::AboveTheTable, view.with_mask(found)?)
+        };
+        objects.push((source, view.mask.as_ref().map_or(0, Mask::count)));
+        tables.push(table);
+        views.push(view);
+    }
+    let mut plan = policy.plan(&views, params.seed)?;
+    if params.hand_check {
+        plan.reject_colliding(&views, gripper, TOP_KEPT);
+    }
+    Ok(ViewsPlanReport {
+        cameras: views.iter().map(|v| v.camera).collect(),
+        tables,
+        objects,
+        candidates_per_view: plan.candidates_per_view.clone(),
+        best: plan.best().copied(),
+        top: plan.candidates.iter().take(TOP_KEPT).copied().collect(),
+        rejections: plan.rejections,
     })
 }

@@ -24,5 +24,5 @@ pub use hand_check::{Rejection, Rejections, check_hand};
 pub use models::{ShippedModel, ViewSetting};
 pub use policy::{GqcnnPolicy, Plan, ScoredGrasp};
 pub use sampler::{ImageSamplerParams, sample_image_grasps};
-pub use sensor::{SensorDepth, read_depth, read_mask};
+pub use sensor::{SensorDepth, read_depth, read_depth_in_units, read_mask, read_mask_of};
 pub use table::{TableFit, TableFitParams, fit_table, objects_above};

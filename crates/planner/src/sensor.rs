@@ -31,6 +31,15 @@ const PLAUSIBLE_MEDIAN_M: [f32; 2] = [0.05, 10.0];
 /// [`PlannerError::File`] naming the file: unreadable, another format or shape, no valid
 /// pixel, or a median depth that says the unit is not metres ("looks like millimetres").
 pub fn read_depth(path: impl AsRef<Path>) -> Result<SensorDepth> {
+    read_depth_in_units(path, 1000.0)
+}
+
+/// [`read_depth`] with a PNG's values in `png_units_per_m` units a metre (1000: millimetres;
+/// `render`'s datasets write 10,000: tenths of a millimetre).
+///
+/// # Errors
+/// See [`read_depth`].
+pub fn read_depth_in_units(path: impl AsRef<Path>, png_units_per_m: f32) -> Result<SensorDepth> {
     let path = path.as_ref();
     let fail = |detail: String| PlannerError::File {
         path: path.to_path_buf(),
@@ -41,7 +50,7 @@ pub fn read_depth(path: impl AsRef<Path>) -> Result<SensorDepth> {
         .map(|e| e.to_string_lossy().to_ascii_lowercase());
     let depth = match extension.as_deref() {
         Some("npy") => read_npy(path).map_err(fail)?,
-        Some("png") => read_png_millimetres(path).map_err(fail)?,
+        Some("png") => read_png_depth(path, png_units_per_m).map_err(fail)?,
         _ => {
             return Err(fail(
                 "unknown depth format: expected .npy (float32 metres) or .png (16-bit millimetres)"
@@ -120,7 +129,7 @@ fn read_npy(path: &Path) -> std::result::Result<SensorDepth, String> {
     })
 }
 
-fn read_png_millimetres(path: &Path) -> std::result::Result<SensorDepth, String> {
+fn read_png_depth(path: &Path, units_per_m: f32) -> std::result::Result<SensorDepth, String> {
     let (info, bytes) = decode_png(path, png::Transformations::IDENTITY)?;
     if info.color_type != png::ColorType::Grayscale || info.bit_depth != png::BitDepth::Sixteen {
         return Err(format!(
@@ -130,7 +139,7 @@ fn read_png_millimetres(path: &Path) -> std::result::Result<SensorDepth, String>
     }
     let depth_m = bytes
         .chunks_exact(2)
-        .map(|b| f32::from(u16::from_be_bytes([b[0], b[1]])) / 1000.0)
+        .map(|b| f32::from(u16::from_be_bytes([b[0], b[1]])) / units_per_m)
         .collect();
     Ok(SensorDepth {
         width: info.width,
@@ -165,6 +174,21 @@ fn decode_png(
 /// [`PlannerError::File`] naming the file: unreadable, another size than the depth image, or
 /// no object pixel.
 pub fn read_mask(path: impl AsRef<Path>, width: u32, height: u32) -> Result<Mask> {
+    read_mask_of(path, width, height, None)
+}
+
+/// [`read_mask`] where the object is the pixels of value `object_id` (of a grey 8-bit mask,
+/// as `render`'s datasets write: 0 background, 1 object, 2 table), or every non-zero pixel
+/// for `None`.
+///
+/// # Errors
+/// See [`read_mask`].
+pub fn read_mask_of(
+    path: impl AsRef<Path>,
+    width: u32,
+    height: u32,
+    object_id: Option<u8>,
+) -> Result<Mask> {
     let path = path.as_ref();
     let fail = |detail: String| PlannerError::File {
         path: path.to_path_buf(),
@@ -185,7 +209,10 @@ pub fn read_mask(path: impl AsRef<Path>, width: u32, height: u32) -> Result<Mask
     let pixel_bytes = channels * sample_bytes;
     let pixels: Vec<bool> = bytes
         .chunks_exact(pixel_bytes)
-        .map(|p| p[..colour * sample_bytes].iter().any(|&b| b != 0))
+        .map(|p| match object_id {
+            Some(id) => p[0] == id,
+            None => p[..colour * sample_bytes].iter().any(|&b| b != 0),
+        })
         .collect();
     if (info.width, info.height) != (width, height) {
         return Err(fail(format!(
