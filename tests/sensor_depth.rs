@@ -419,6 +419,40 @@ fn plan_over_a_rendered_views_folder() {
         mask.count()
     );
 
+    // One view of the folder through --depth: its PNG read in the dataset's 0.1 mm units
+    // (not millimetres: the table would be 5 m away), its mask's object alone.
+    let intrinsics = dir.path().join("phoxi.json");
+    let k = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
+    std::fs::write(
+        &intrinsics,
+        format!(
+            r#"{{"K": [[{}, 0, {}], [0, {}, {}], [0, 0, 1]], "width": {}, "height": {}}}"#,
+            k.fx, k.cx, k.fy, k.cy, k.width, k.height
+        ),
+    )
+    .unwrap();
+    let single = Command::new(env!("CARGO_BIN_EXE_plan"))
+        .args(["--depth", views_dir.join("000_depth.png").to_str().unwrap()])
+        .args(["--intrinsics", intrinsics.to_str().unwrap()])
+        .args([
+            "--mask",
+            views_dir.join("000_mask.png").to_str().unwrap(),
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        single.status.success(),
+        "{}",
+        String::from_utf8_lossy(&single.stderr)
+    );
+    let file: serde_json::Value = serde_json::from_slice(&single.stdout).unwrap();
+    let height = file["table"]["camera_height_m"].as_f64().unwrap();
+    assert!(
+        (0.45..0.6).contains(&height),
+        "the camera {height} m above the table"
+    );
+
     // A camera without its depth image, and a depth image without its camera.
     let cameras_path = views_dir.join("cameras.json");
     let cameras: Vec<serde_json::Value> =

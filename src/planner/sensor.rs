@@ -9,7 +9,7 @@ use std::time::Instant;
 use mvgrasp_geometry::{Camera, Intrinsics, read_camera_pose};
 use mvgrasp_planner::{
     DepthImage, GqcnnPolicy, Mask, Rejections, ScoredGrasp, TableFit, TableFitParams, View,
-    fit_table, objects_above, read_depth, read_depth_in_units, read_mask, read_mask_of,
+    fit_table, objects_above, read_depth_in_units, read_mask_of,
 };
 use serde::Serialize;
 
@@ -147,12 +147,15 @@ pub fn plan_on_sensor_depth(
 }
 
 /// The view of `files`: its depth with its intrinsics, posed by the pose file (else at the
-/// identity, until the table says where it is), with the mask file's pixels.
+/// identity, until the table says where it is), with the mask file's pixels. A PNG inside a
+/// `render` dataset reads in that dataset's units and mask ids (see [`read_views_dir`]).
 ///
 /// # Errors
 /// See [`plan_on_sensor_depth`].
 pub fn read_view(files: &SensorFiles) -> Result<View> {
-    let depth = read_depth(&files.depth)?;
+    // A PNG inside a `render` dataset is in its units (0.1 mm), its masks in its ids.
+    let (units, object_id) = render_conventions(files.depth.parent().unwrap_or(Path::new(".")));
+    let depth = read_depth_in_units(&files.depth, units)?;
     let intrinsics = Intrinsics::from_file(&files.intrinsics)?;
     if (intrinsics.width, intrinsics.height) != (depth.width, depth.height) {
         return Err(mismatch(
@@ -177,9 +180,35 @@ pub fn read_view(files: &SensorFiles) -> Result<View> {
     };
     let view = View::new(0, camera, DepthImage::new(intrinsics, depth.depth_m)?)?;
     match &files.mask {
-        Some(path) => Ok(view.with_mask(read_mask(path, intrinsics.width, intrinsics.height)?)?),
+        Some(path) => Ok(view.with_mask(read_mask_of(
+            path,
+            intrinsics.width,
+            intrinsics.height,
+            object_id,
+        )?)?),
         None => Ok(view),
     }
+}
+
+/// The PNG depth units and the object's mask value of the `render` dataset that `dir` is in
+/// (its `dataset.json` in `dir` or up to two folders above): `(1000, None)` (millimetres, any
+/// non-zero mask pixel) when there is none.
+fn render_conventions(dir: &Path) -> (f32, Option<u8>) {
+    let manifest = [dir.to_path_buf(), dir.join(".."), dir.join("../..")]
+        .into_iter()
+        .map(|d| d.join("dataset.json"))
+        .find(|p| p.is_file())
+        .and_then(|p| std::fs::read_to_string(p).ok())
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
+    let units = manifest
+        .as_ref()
+        .and_then(|m| m["depth_png_units_per_m"].as_f64())
+        .map_or(1000.0, |u| u as f32);
+    let object_id = manifest
+        .as_ref()
+        .and_then(|m| m["mask_ids"]["object"].as_u64())
+        .and_then(|id| u8::try_from(id).ok());
+    (units, object_id)
 }
 
 fn mismatch(path: &Path, detail: String) -> Error {
@@ -228,20 +257,7 @@ pub fn read_views_dir(dir: &Path) -> Result<Vec<View>> {
     if cameras.is_empty() {
         return Err(mismatch(&cameras_path, "no camera".into()));
     }
-    let manifest = [dir.to_path_buf(), dir.join(".."), dir.join("../..")]
-        .into_iter()
-        .map(|d| d.join("dataset.json"))
-        .find(|p| p.is_file())
-        .and_then(|p| std::fs::read_to_string(p).ok())
-        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
-    let units = manifest
-        .as_ref()
-        .and_then(|m| m["depth_png_units_per_m"].as_f64())
-        .map_or(1000.0, |u| u as f32);
-    let object_id = manifest
-        .as_ref()
-        .and_then(|m| m["mask_ids"]["object"].as_u64())
-        .and_then(|id| u8::try_from(id).ok());
+    let (units, object_id) = render_conventions(dir);
     // Depth images past the cameras' count: the folder and its cameras disagree.
     let extra = dir.join(format!("{:03}_depth.npy", cameras.len()));
     let extra_png = dir.join(format!("{:03}_depth.png", cameras.len()));
