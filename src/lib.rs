@@ -15,8 +15,10 @@ pub mod error;
 pub mod grasp_dataset;
 pub mod grasp_image;
 pub mod grasps_file;
+pub mod mcap_log;
 pub mod planner;
 pub mod report;
+pub mod sensor_files;
 
 pub use error::{Error, ErrorKind, Result};
 pub use mvgrasp_geometry as geometry;

@@ -317,6 +317,47 @@ fn plan_on_depth_writes_grasps_json_and_an_overlay() {
     assert!((0.0..0.05).contains(&z_world), "{best}");
     assert_eq!(best["p"][2], best["world_from_gripper"][2][3]);
     assert!(out.join("overlay_0.png").is_file());
+    // The MCAP log: one message on each Foxglove channel, the grasps' poses those of the file.
+    let log = std::fs::read(out.join("plan.mcap")).unwrap();
+    let mut topics = std::collections::BTreeMap::new();
+    for message in mcap::MessageStream::new(&log).unwrap() {
+        let message = message.unwrap();
+        let schema = message.channel.schema.as_ref().unwrap();
+        assert_eq!(schema.encoding, "jsonschema");
+        let body: serde_json::Value = serde_json::from_slice(&message.data).unwrap();
+        topics.insert(message.channel.topic.clone(), (schema.name.clone(), body));
+    }
+    let names: Vec<(&str, &str)> = topics
+        .iter()
+        .map(|(topic, (schema, _))| (topic.as_str(), schema.as_str()))
+        .collect();
+    assert_eq!(
+        names,
+        [
+            ("/camera_0/calibration", "foxglove.CameraCalibration"),
+            ("/camera_0/depth", "foxglove.RawImage"),
+            ("/grasps", "foxglove.PosesInFrame"),
+            ("/table", "foxglove.PoseInFrame"),
+            ("/tf", "foxglove.FrameTransforms"),
+        ]
+    );
+    let poses = &topics["/grasps"].1["poses"];
+    assert_eq!(
+        poses.as_array().unwrap().len(),
+        file["grasps"].as_array().unwrap().len()
+    );
+    for axis in 0..3 {
+        let logged = poses[0]["position"][["x", "y", "z"][axis]]
+            .as_f64()
+            .unwrap();
+        let listed = best["world_from_gripper"][axis][3].as_f64().unwrap();
+        assert!((logged - listed).abs() < 1e-6, "{logged} {listed}");
+    }
+    let image = &topics["/camera_0/depth"].1;
+    assert_eq!(
+        (image["width"].as_u64(), image["encoding"].as_str()),
+        (Some(640), Some("32FC1"))
+    );
     // --json prints the same file.
     let printed = run(&["--json"]);
     assert!(printed.status.success());

@@ -22,6 +22,7 @@ use mvgrasp::cli::ObjectArgs;
 use mvgrasp::geometry::{Intrinsics, IntrinsicsPreset};
 use mvgrasp::grasps_file::{GraspsFile, WorldFrame, write_overlay};
 use mvgrasp::infer::Gqcnn;
+use mvgrasp::mcap_log::write_plan_log;
 use mvgrasp::planner::{
     CemParams, GqcnnPolicy, ObjectSource, PlanParams, PlanReport, ScoredGrasp, SensorFiles,
     SensorPlanParams, SensorPlanReport, View, ViewSetting, models, plan_grasp,
@@ -93,7 +94,8 @@ struct Args {
     #[arg(long, conflicts_with_all = ["depth", "mesh", "views", "distance_m", "stable_pose"])]
     views_dir: Option<PathBuf>,
     /// Write `grasps.json` (the ranked grasps with their poses; README, "grasps.json") and, for
-    /// a sensor's depth, a picture of the best grasps over it (`overlay_0.png`) into this
+    /// sensor depth, a picture of the best grasps over each view (`overlay_N.png`) and an MCAP
+    /// log for robot tooling (`plan.mcap`: depth, calibrations, poses, table, grasps) into this
     /// folder.
     #[arg(long)]
     out: Option<PathBuf>,
@@ -207,7 +209,7 @@ fn run(args: &Args) -> Result<bool, String> {
 }
 
 /// Writes `grasps.json` and, for each of `views`, a picture of `grasps` over its depth
-/// (`overlay_N.png`) into `out`.
+/// (`overlay_N.png`) into `out`, and with views the MCAP log of the plan (`plan.mcap`).
 fn write_outputs(
     out: &Path,
     file: &GraspsFile,
@@ -221,6 +223,10 @@ fn write_outputs(
     for (i, view) in views.iter().enumerate() {
         let picture = out.join(format!("overlay_{i}.png"));
         write_overlay(&picture, &view.depth, i, grasps).map_err(|e| e.to_string())?;
+    }
+    if !views.is_empty() {
+        write_plan_log(&out.join("plan.mcap"), views, file.table.as_ref(), grasps)
+            .map_err(|e| e.to_string())?;
     }
     Ok(())
 }

@@ -45,7 +45,8 @@ pub fn write_depth_png(path: &Path, width: u32, height: u32, depth_m: &[f32]) ->
     )
 }
 
-fn encode(
+/// Encodes `data` as a PNG of the given colour type and bit depth at `path`.
+pub(crate) fn encode(
     path: &Path,
     width: u32,
     height: u32,

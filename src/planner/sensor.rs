@@ -9,8 +9,10 @@ use std::time::Instant;
 use mvgrasp_geometry::{Camera, Intrinsics, read_camera_pose};
 use mvgrasp_planner::{
     DepthImage, GqcnnPolicy, Mask, Rejections, ScoredGrasp, TableFit, TableFitParams, View,
-    fit_table, objects_above, read_depth_in_units, read_mask_of,
+    fit_table, objects_above,
 };
+
+use crate::sensor_files::{read_depth_in_units, read_mask_of};
 use serde::Serialize;
 
 use crate::error::{Error, Result};

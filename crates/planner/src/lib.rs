@@ -10,7 +10,6 @@ pub mod models;
 pub mod policy;
 pub mod sampler;
 pub mod seed;
-pub mod sensor;
 pub mod table;
 #[cfg(test)]
 mod test_scenes;
@@ -24,5 +23,4 @@ pub use hand_check::{Rejection, Rejections, check_hand};
 pub use models::{ShippedModel, ViewSetting};
 pub use policy::{GqcnnPolicy, Plan, ScoredGrasp};
 pub use sampler::{ImageSamplerParams, sample_image_grasps};
-pub use sensor::{SensorDepth, read_depth, read_depth_in_units, read_mask, read_mask_of};
 pub use table::{TableFit, TableFitParams, fit_table, objects_above};

@@ -6,8 +6,10 @@ use std::fs::File;
 use std::io::BufReader;
 use std::path::Path;
 
-use crate::depth_image::Mask;
-use crate::error::{PlannerError, Result};
+use mvgrasp_planner::{Mask, PlannerError};
+
+/// `Result` with the planner's error (a sensor file's errors are [`PlannerError::File`]).
+pub type Result<T, E = PlannerError> = std::result::Result<T, E>;
 
 /// A depth image as read, before it is paired with intrinsics.
 #[derive(Clone, Debug, PartialEq)]
@@ -251,12 +253,7 @@ mod tests {
         depth: png::BitDepth,
         data: &[u8],
     ) {
-        let file = File::create(path).unwrap();
-        let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
-        encoder.set_color(color);
-        encoder.set_depth(depth);
-        let mut writer = encoder.write_header().unwrap();
-        writer.write_image_data(data).unwrap();
+        crate::dataset::images::encode(path, width, height, color, depth, data).unwrap();
     }
 
     #[test]
