@@ -152,12 +152,20 @@ fn sample(depth: &DepthImage, [u, v]: [f32; 2]) -> f32 {
     }
     let (x0, y0) = (u.floor() as i64, v.floor() as i64);
     let (fx, fy) = (u - u.floor(), v - v.floor());
-    let corners = [
-        at(x0, y0),
-        at(x0 + 1, y0),
-        at(x0, y0 + 1),
-        at(x0 + 1, y0 + 1),
-    ];
+    let (w, h) = (i64::from(depth.width()), i64::from(depth.height()));
+    // Inside the image (nearly always): the four corners straight from the slice.
+    let corners = if x0 >= 0 && y0 >= 0 && x0 + 1 < w && y0 + 1 < h {
+        let data = depth.as_slice();
+        let (i, w) = ((y0 * w + x0) as usize, w as usize);
+        [data[i], data[i + 1], data[i + w], data[i + w + 1]]
+    } else {
+        [
+            at(x0, y0),
+            at(x0 + 1, y0),
+            at(x0, y0 + 1),
+            at(x0 + 1, y0 + 1),
+        ]
+    };
     if corners.iter().all(|&d| d > 0.0) {
         let top = corners[0] * (1.0 - fx) + corners[1] * fx;
         let bottom = corners[2] * (1.0 - fx) + corners[3] * fx;
