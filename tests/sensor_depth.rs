@@ -10,8 +10,8 @@ use mvgrasp::geometry::objects::{Category, generate as generate_object};
 use mvgrasp::geometry::{Camera, Intrinsics, IntrinsicsPreset, RestingPoses, Vec3};
 use mvgrasp::grasp_dataset::render_depths;
 use mvgrasp::planner::{
-    GqcnnPolicy, PlanParams, SensorFiles, SensorPlanParams, models, plan_on_sensor_depth,
-    read_view, read_views_dir,
+    DepthImage, GqcnnPolicy, PlanParams, SensorFiles, SensorPlanParams, View, models,
+    plan_on_sensor_depth, plan_on_view, read_view, read_views_dir,
 };
 
 use crate::shared_data::shared_data;
@@ -525,6 +525,56 @@ fn plan_over_a_rendered_views_folder() {
         err.contains("cameras.json") && err.contains("no camera"),
         "{err}"
     );
+}
+
+/// An in-memory view (a robot's depth stream) plans the same grasps as the same image read
+/// from files.
+#[test]
+fn a_view_in_memory_plans_as_its_files_do() {
+    let dir = tempfile::tempdir().unwrap();
+    let k = Intrinsics::preset(IntrinsicsPreset::Primesense);
+    let depth: Vec<f32> = (0..k.width * k.height)
+        .map(|i| {
+            let (u, v) = ((i % k.width) as f32, (i / k.width) as f32);
+            let (x, y) = ((u - k.cx) * 0.65 / k.fx, (v - k.cy) * 0.65 / k.fy);
+            if x.abs() < 0.02 && y.abs() < 0.03 {
+                0.65
+            } else {
+                0.7
+            }
+        })
+        .collect();
+    let path = dir.path().join("depth.png");
+    write_depth_png_values(&path, k.width, k.height, &depth);
+    let intrinsics = dir.path().join("camera.json");
+    std::fs::write(
+        &intrinsics,
+        r#"{"K": [[525, 0, 319.5], [0, 525, 239.5], [0, 0, 1]], "width": 640, "height": 480}"#,
+    )
+    .unwrap();
+    let gripper = PlanParams::default().labels.gripper().unwrap();
+    let policy =
+        GqcnnPolicy::new(models::GQCNN_TOPDOWN.load().unwrap(), gripper.max_opening_m).unwrap();
+    let params = SensorPlanParams::default();
+    let files = SensorFiles {
+        depth: path,
+        intrinsics,
+        camera_pose: None,
+        mask: None,
+    };
+    let from_files = plan_on_sensor_depth(&policy, &gripper, &files, &params).unwrap();
+    let camera = Camera {
+        intrinsics: k,
+        world_from_camera: mvgrasp::geometry::Pose3::IDENTITY,
+    };
+    let view = View::new(0, camera, DepthImage::new(k, depth).unwrap()).unwrap();
+    let in_memory = plan_on_view(&policy, &gripper, view, false, &params).unwrap();
+    assert!(
+        in_memory.best.is_some() && in_memory.candidates > 50,
+        "{in_memory:?}"
+    );
+    assert_eq!(in_memory.top, from_files.top);
+    assert_eq!(in_memory.camera, from_files.camera);
 }
 
 #[test]

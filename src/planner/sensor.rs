@@ -59,7 +59,7 @@ impl Default for SensorPlanParams {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ObjectSource {
-    /// The mask file.
+    /// The view's own mask (a mask file, or one given with an in-memory view).
     MaskFile,
     /// What stands on the fitted table ([`objects_above`]).
     AboveTheTable,
@@ -93,7 +93,7 @@ pub struct SensorPlanReport {
     pub timings: [f64; 3],
 }
 
-/// Plans a grasp on the depth image of `files`.
+/// Plans a grasp on the depth image of `files` ([`read_view`], then [`plan_on_view`]).
 ///
 /// # Errors
 /// A file that cannot be read or does not fit the others (each error names its file), no
@@ -107,10 +107,28 @@ pub fn plan_on_sensor_depth(
     let started = Instant::now();
     let view = read_view(files)?;
     let read_s = started.elapsed().as_secs_f64();
+    let mut report = plan_on_view(policy, gripper, view, files.camera_pose.is_some(), params)?;
+    report.timings[0] = read_s;
+    Ok(report)
+}
 
+/// Plans a grasp on one view held in memory (a robot's depth stream, no files): its depth, its
+/// camera's intrinsics and, when `pose_given`, its pose in the world (else the world is put on
+/// the table fitted in the image, and the view's pose is ignored), and its object mask if it
+/// has one (else the object is what stands on the table).
+///
+/// # Errors
+/// No table in the image, nothing on it (without a mask), or a network error.
+pub fn plan_on_view(
+    policy: &GqcnnPolicy,
+    gripper: &mvgrasp_grasp::Gripper,
+    view: View,
+    pose_given: bool,
+    params: &SensorPlanParams,
+) -> Result<SensorPlanReport> {
     let started = Instant::now();
     let table = fit_table(&view.depth, view.mask.as_ref(), &params.table)?;
-    let pose_estimated = files.camera_pose.is_none();
+    let pose_estimated = !pose_given;
     let mut view = view;
     if pose_estimated {
         view.camera = table.camera(view.camera.intrinsics)?;
@@ -144,7 +162,7 @@ pub fn plan_on_sensor_depth(
         best: plan.best().copied(),
         top: plan.candidates.iter().take(TOP_KEPT).copied().collect(),
         rejections: plan.rejections,
-        timings: [read_s, table_s, plan_s],
+        timings: [0.0, table_s, plan_s],
     })
 }
 
