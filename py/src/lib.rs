@@ -14,6 +14,7 @@ mod errors;
 mod grasp_dataset;
 mod mesh;
 mod networks;
+mod planning;
 
 /// The native half of the `mvgrasp` package; import `mvgrasp`, not this module.
 #[pyo3::pymodule(name = "_native")]
@@ -36,6 +37,8 @@ mod native {
     use crate::mesh::load_mesh;
     #[pymodule_export]
     use crate::networks::load_network;
+    #[pymodule_export]
+    use crate::planning::plan_depth;
 
     #[pymodule_init]
     fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -23,6 +23,7 @@ from mvgrasp._native import (
     load_intrinsics,
     load_mesh,
     load_network,
+    plan_depth,
     write_grasp_manifest,
 )
 
@@ -41,5 +42,6 @@ __all__ = [
     "load_intrinsics",
     "load_mesh",
     "load_network",
+    "plan_depth",
     "write_grasp_manifest",
 ]

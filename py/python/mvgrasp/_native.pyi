@@ -56,6 +56,38 @@ def load_intrinsics(path: str | os.PathLike[str]) -> dict[str, Any]:
             names the file.
     """
 
+def plan_depth(
+    depth: npt.NDArray[np.float32],
+    k: npt.NDArray[np.float64],
+    *,
+    mask: npt.NDArray[np.bool_] | None = None,
+    world_from_camera: npt.NDArray[np.float64] | None = None,
+    model: str = "gqcnn_small_topdown",
+    cem: bool = False,
+    hand_check: bool = True,
+    seed: int = 0,
+) -> dict[str, Any]:
+    """Plans a grasp on one depth image, as ``plan --depth`` does (the GIL released).
+
+    ``depth``: float32 metres, shape ``(H, W)`` or ``(H, W, 1)``; NaN, infinities and 0 are
+    missing. ``k``: the 3x3 camera matrix (no skew). ``mask``: bool ``(H, W)``, the object's
+    pixels (without it, the object is what stands on the table fitted in the image).
+    ``world_from_camera``: the camera's 4x4 pose (without it the world is put on the fitted
+    table). ``model``: a shipped network's name or an export's ``NAME.json``.
+
+    Returns the content of ``grasps.json`` (format ``mvgrasp-grasps/1``): ``frame``,
+    ``views``, ``grasps`` (best first, each with ``camera_from_gripper`` and
+    ``world_from_gripper`` as 4x4 nested lists, ``width_m``, ``quality``, ``u``, ``v``,
+    ``angle_rad``, ``depth_m``, ``p``, ``phi_rad``, ``theta_rad``), ``rejections``, ``table``.
+
+    Raises:
+        ValueError: an array of the wrong shape, a camera matrix with skew, a pose that is not
+            rigid.
+        TypeError: an array of another dtype.
+        PlanningError: no table in the image, or nothing on it.
+        WeightsError: the network cannot be loaded.
+    """
+
 def load_network(path: str | os.PathLike[str]) -> dict[str, Any]:
     """Loads a GQ-CNN export (``NAME.json`` and the ``NAME.safetensors`` it names) as the
     planner does, checking every tensor's name and shape and the input contract.

@@ -173,14 +173,23 @@ pub fn read_camera_pose(path: impl AsRef<Path>) -> Result<Pose3> {
     let m = serde_json::from_str::<PoseJson>(&text)
         .map_err(|e| parse_error(e.to_string()))?
         .world_from_camera;
+    pose_from_rows(m).map_err(parse_error)
+}
+
+/// The rigid transform of a 4x4 matrix given in rows (last row 0, 0, 0, 1; a proper rotation
+/// within 1e-3; finite), or why it is not one.
+///
+/// # Errors
+/// A message saying why the matrix is not a rigid transform.
+pub fn pose_from_rows(m: [[f64; 4]; 4]) -> std::result::Result<Pose3, String> {
     if m[3] != [0.0, 0.0, 0.0, 1.0] {
-        return Err(parse_error(format!(
+        return Err(format!(
             "the last row is {:?}, not [0, 0, 0, 1]: not a rigid transform",
             m[3]
-        )));
+        ));
     }
     let rows = [0, 1, 2].map(|i| [m[i][0], m[i][1], m[i][2]]);
-    rigid_pose(rows, [m[0][3], m[1][3], m[2][3]]).map_err(parse_error)
+    rigid_pose(rows, [m[0][3], m[1][3], m[2][3]])
 }
 
 /// The pose with rotation `rows` and translation `t`, if the rotation is a proper one (within

@@ -5,5 +5,5 @@
 mod extrinsics;
 mod intrinsics;
 
-pub use extrinsics::{Camera, read_camera_pose, read_tf};
+pub use extrinsics::{Camera, pose_from_rows, read_camera_pose, read_tf};
 pub use intrinsics::{Intrinsics, IntrinsicsPreset};

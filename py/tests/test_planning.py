@@ -1,0 +1,70 @@
+"""Planning from NumPy: gqcnn's real Primesense depth image to grasps, and bad arrays."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import mvgrasp
+from conftest import shared_data
+
+PRIMESENSE_K = np.array([[525.0, 0.0, 319.5], [0.0, 525.0, 239.5], [0.0, 0.0, 1.0]])
+
+
+def box_on_table() -> np.ndarray:
+    """A 4 x 6 cm box 5 cm tall on a table 0.7 m below a Primesense looking straight down."""
+    v, u = np.mgrid[0:480, 0:640].astype(np.float32)
+    x, y = (u - 319.5) * 0.65 / 525.0, (v - 239.5) * 0.65 / 525.0
+    depth = np.full((480, 640), 0.7, dtype=np.float32)
+    depth[(np.abs(x) < 0.02) & (np.abs(y) < 0.03)] = 0.65
+    return depth
+
+
+def test_a_box_on_a_table_is_grasped_across() -> None:
+    result = mvgrasp.plan_depth(box_on_table(), PRIMESENSE_K)
+    assert result["format"] == "mvgrasp-grasps/1"
+    assert result["frame"] == "estimated"
+    best = result["grasps"][0]
+    # Across the 4 cm side, centred under the camera.
+    assert 0.035 < best["width_m"] < 0.05
+    assert abs(best["u"] - 319.5) < 6 and abs(best["v"] - 239.5) < 10
+    pose = np.array(best["world_from_gripper"])
+    assert pose.shape == (4, 4)
+    assert np.allclose(pose[:3, :3] @ pose[:3, :3].T, np.eye(3), atol=1e-5)
+    # The same seed, the same grasps; (H, W, 1) reads as (H, W).
+    again = mvgrasp.plan_depth(box_on_table()[..., None], PRIMESENSE_K)
+    assert again == result
+
+
+def test_the_real_primesense_image_is_grasped_on_the_object() -> None:
+    root = shared_data("real_depth/gqcnn/data/examples/single_object/primesense")
+    depth = np.load(root / "depth_0.npy")
+    from matplotlib.image import imread
+
+    mask = imread(root / "segmask_0.png") > 0
+    result = mvgrasp.plan_depth(depth, PRIMESENSE_K, mask=mask)
+    best = result["grasps"][0]
+    rows, cols = np.nonzero(mask)
+    nearest = np.min(np.hypot(cols - best["u"], rows - best["v"]))
+    assert nearest < 3.0
+    assert result["table"]["inlier_share"] > 0.5
+
+
+def test_bad_arrays_raise_value_and_type_errors() -> None:
+    depth = box_on_table()
+    with pytest.raises(ValueError, match="depth: shape"):
+        mvgrasp.plan_depth(depth[None], PRIMESENSE_K)
+    with pytest.raises(TypeError):
+        mvgrasp.plan_depth(depth.astype(np.float64), PRIMESENSE_K)
+    skewed = PRIMESENSE_K.copy()
+    skewed[0, 1] = 1.0
+    with pytest.raises(ValueError, match="no skew"):
+        mvgrasp.plan_depth(depth, skewed)
+    with pytest.raises(ValueError, match="mask: shape"):
+        mvgrasp.plan_depth(depth, PRIMESENSE_K, mask=np.ones((4, 4), dtype=bool))
+    with pytest.raises(ValueError, match="not a rigid transform"):
+        mvgrasp.plan_depth(depth, PRIMESENSE_K, world_from_camera=2.0 * np.eye(4))
+    with pytest.raises(mvgrasp.PlanningError, match="nothing stands on the table"):
+        mvgrasp.plan_depth(np.full((480, 640), 0.7, dtype=np.float32), PRIMESENSE_K)
+    with pytest.raises(mvgrasp.WeightsError, match="no_such_model"):
+        mvgrasp.plan_depth(depth, PRIMESENSE_K, model="no_such_model.json")
