@@ -73,7 +73,7 @@ fn a_grasp_on_each_real_single_object_image_with_and_without_its_mask() {
                 mask: Some(mask.clone()),
                 ..files
             };
-            let off = distance_to_object(&judged, &report.camera, best.grasp.center());
+            let off = distance_to_object(&judged, &report.view.camera, best.grasp.center());
             assert!(
                 off < 0.015,
                 "image {i}, mask {with_mask}: the grasp's centre is {:.1} cm from the object",
@@ -127,7 +127,7 @@ fn a_grasp_on_some_object_in_each_real_clutter_image_with_and_without_the_camera
                 let best = report.best.unwrap_or_else(|| {
                     panic!("{folder} {i}, pose {with_pose}: no grasp: {report:?}")
                 });
-                let off = distance_to_object(&files, &report.camera, best.grasp.center());
+                let off = distance_to_object(&files, &report.view.camera, best.grasp.center());
                 assert!(
                     off < 0.015,
                     "{folder} {i}, pose {with_pose}: the grasp's centre is {:.1} cm from the \
@@ -195,6 +195,7 @@ fn oblique_rendered_views_find_the_table_and_a_grasp_with_the_pose_withheld() {
             .best
             .unwrap_or_else(|| panic!("{elevation_deg} deg: no grasp: {report:?}"));
         let in_camera = report
+            .view
             .camera
             .camera_from_world()
             .transform_point(best.grasp.center());
@@ -353,6 +354,17 @@ fn plan_on_depth_writes_grasps_json_and_an_overlay() {
         let listed = best["world_from_gripper"][axis][3].as_f64().unwrap();
         assert!((logged - listed).abs() < 1e-6, "{logged} {listed}");
     }
+    // The camera on /tf is where grasps.json puts it: on the estimated table, 0.7 m above it.
+    let logged_z = topics["/tf"].1["transforms"][0]["translation"]["z"]
+        .as_f64()
+        .unwrap();
+    let listed_z = file["views"][0]["world_from_camera"][2][3]
+        .as_f64()
+        .unwrap();
+    assert!(
+        (logged_z - listed_z).abs() < 1e-6 && (logged_z - 0.7).abs() < 0.005,
+        "{logged_z} {listed_z}"
+    );
     let image = &topics["/camera_0/depth"].1;
     assert_eq!(
         (image["width"].as_u64(), image["encoding"].as_str()),
@@ -574,7 +586,7 @@ fn a_view_in_memory_plans_as_its_files_do() {
         "{in_memory:?}"
     );
     assert_eq!(in_memory.top, from_files.top);
-    assert_eq!(in_memory.camera, from_files.camera);
+    assert_eq!(in_memory.view.camera, from_files.view.camera);
 }
 
 #[test]

@@ -138,7 +138,7 @@ pub(crate) fn plan_depth<'py>(
         };
         Ok(GraspsFile::new(
             frame,
-            &[report.camera],
+            &[report.view.camera],
             &report.top,
             report.rejections,
             Some(report.table),

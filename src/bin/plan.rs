@@ -26,7 +26,7 @@ use mvgrasp::mcap_log::write_plan_log;
 use mvgrasp::planner::{
     CemParams, GqcnnPolicy, ObjectSource, PlanParams, PlanReport, ScoredGrasp, SensorFiles,
     SensorPlanParams, SensorPlanReport, View, ViewSetting, models, plan_grasp,
-    plan_on_sensor_depth, plan_on_views_dir, read_view, read_views_dir,
+    plan_on_sensor_depth, plan_on_views_dir,
 };
 use mvgrasp::render::{Backend, Renderer};
 use mvgrasp::{ObjectReport, ReportParams};
@@ -277,7 +277,7 @@ fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<bool, String> {
     };
     let file = GraspsFile::new(
         frame,
-        &[report.camera],
+        &[report.view.camera],
         &report.top,
         report.rejections,
         Some(report.table),
@@ -288,8 +288,7 @@ fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<bool, String> {
         print!("{}", sensor_summary(&model_name, &files, &report));
     }
     if let Some(out) = &args.out {
-        let view = read_view(&files).map_err(|e| e.to_string())?;
-        write_outputs(out, &file, &[view], &report.top)?;
+        write_outputs(out, &file, std::slice::from_ref(&report.view), &report.top)?;
     }
     Ok(report.best.is_some())
 }
@@ -299,9 +298,10 @@ fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
     use std::fmt::Write;
     let (model_name, policy, gripper, params) = sensor_setup(args)?;
     let report = plan_on_views_dir(&policy, &gripper, dir, &params).map_err(|e| e.to_string())?;
+    let cameras: Vec<_> = report.views.iter().map(|v| v.camera).collect();
     let file = GraspsFile::new(
         WorldFrame::Given,
-        &report.cameras,
+        &cameras,
         &report.top,
         report.rejections,
         report.tables.first().copied(),
@@ -314,13 +314,13 @@ fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
             s,
             "views: {} ({} cameras), plan: {model_name}",
             dir.display(),
-            report.cameras.len()
+            report.views.len()
         );
         let _ = writeln!(
             s,
             "   view  elevation  table inliers  object pixels  candidates  best in the top 10"
         );
-        for (i, camera) in report.cameras.iter().enumerate() {
+        for (i, view) in report.views.iter().enumerate() {
             let best = report
                 .top
                 .iter()
@@ -330,7 +330,7 @@ fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
             let _ = writeln!(
                 s,
                 "   {i:>4}  {:>5.1} deg  {:>12.1}%  {:>8} ({})  {:>10}  {best:>18}",
-                mvgrasp::planner::theta_rad(camera).to_degrees(),
+                view.theta_rad().to_degrees(),
                 100.0 * report.tables[i].inlier_share,
                 pixels,
                 match source {
@@ -371,8 +371,7 @@ fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
         print!("{s}");
     }
     if let Some(out) = &args.out {
-        let views = read_views_dir(dir).map_err(|e| e.to_string())?;
-        write_outputs(out, &file, &views, &report.top)?;
+        write_outputs(out, &file, &report.views, &report.top)?;
     }
     Ok(report.best.is_some())
 }
@@ -380,7 +379,7 @@ fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
 fn sensor_summary(model: &str, files: &SensorFiles, r: &SensorPlanReport) -> String {
     use std::fmt::Write;
     let mut s = String::new();
-    let k = &r.camera.intrinsics;
+    let k = &r.view.camera.intrinsics;
     let _ = writeln!(
         s,
         "depth: {} ({} x {}, fx {:.1}, fy {:.1} from {})",
@@ -457,6 +456,7 @@ fn sensor_summary(model: &str, files: &SensorFiles, r: &SensorPlanReport) -> Str
         g.angle_rad.to_degrees()
     );
     let c = r
+        .view
         .camera
         .camera_from_world()
         .transform_point(best.grasp.center());

@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use mvgrasp_geometry::{Camera, Intrinsics, read_camera_pose};
 use mvgrasp_planner::{
-    DepthImage, GqcnnPolicy, Mask, Rejections, ScoredGrasp, TableFit, TableFitParams, View,
+    DepthImage, GqcnnPolicy, Mask, Plan, Rejections, ScoredGrasp, TableFit, TableFitParams, View,
     fit_table, objects_above,
 };
 
@@ -65,11 +65,13 @@ pub enum ObjectSource {
     AboveTheTable,
 }
 
-/// What [`plan_on_sensor_depth`] found.
-#[derive(Clone, Debug, Serialize)]
+/// What [`plan_on_sensor_depth`] found (`grasps.json`, [`crate::grasps_file`], is its
+/// serialised form).
+#[derive(Clone, Debug)]
 pub struct SensorPlanReport {
-    /// The camera: its intrinsics, and its pose in the world (given, or on the fitted table).
-    pub camera: Camera,
+    /// The view as planned: its camera posed in the world (given, or on the fitted table) and
+    /// its object mask (given, or found on the table).
+    pub view: View,
     /// Whether the camera's pose was estimated from the table (no pose file).
     pub pose_estimated: bool,
     /// The table fitted in the image (the camera's frame), with how well it fit.
@@ -88,8 +90,7 @@ pub struct SensorPlanReport {
     pub top: Vec<ScoredGrasp>,
     /// Candidates rejected before the best was chosen, by reason.
     pub rejections: Rejections,
-    /// Seconds: reading the files, fitting the table, planning (not in the JSON).
-    #[serde(skip)]
+    /// Seconds: reading the files, fitting the table, planning.
     pub timings: [f64; 3],
 }
 
@@ -127,10 +128,40 @@ pub fn plan_on_view(
     params: &SensorPlanParams,
 ) -> Result<SensorPlanReport> {
     let started = Instant::now();
+    let located = locate(view, pose_given, params)?;
+    let table_s = started.elapsed().as_secs_f64();
+    let started = Instant::now();
+    let views = [located.view];
+    let plan = plan_views(policy, gripper, &views, params)?;
+    let plan_s = started.elapsed().as_secs_f64();
+    let [view] = views;
+    Ok(SensorPlanReport {
+        object_pixels: view.mask.as_ref().map_or(0, Mask::count),
+        view,
+        pose_estimated: !pose_given,
+        camera_elevation_deg: located.table.theta_rad().to_degrees(),
+        table: located.table,
+        object: located.object,
+        candidates: plan.candidates_per_view.iter().sum(),
+        best: plan.best().copied(),
+        top: plan.candidates.iter().take(TOP_KEPT).copied().collect(),
+        rejections: plan.rejections,
+        timings: [0.0, table_s, plan_s],
+    })
+}
+
+/// A view with its table fitted, posed on it unless `pose_given`, and its object found on it
+/// when it has no mask.
+struct Located {
+    view: View,
+    table: TableFit,
+    object: ObjectSource,
+}
+
+fn locate(view: View, pose_given: bool, params: &SensorPlanParams) -> Result<Located> {
     let table = fit_table(&view.depth, view.mask.as_ref(), &params.table)?;
-    let pose_estimated = !pose_given;
     let mut view = view;
-    if pose_estimated {
+    if !pose_given {
         view.camera = table.camera(view.camera.intrinsics)?;
     }
     let object = if view.mask.is_some() {
@@ -140,30 +171,25 @@ pub fn plan_on_view(
         view = view.with_mask(objects)?;
         ObjectSource::AboveTheTable
     };
-    let object_pixels = view.mask.as_ref().map_or(0, Mask::count);
-    let table_s = started.elapsed().as_secs_f64();
-
-    let started = Instant::now();
-    let views = [view];
-    let mut plan = policy.plan(&views, params.seed)?;
-    if params.hand_check {
-        plan.reject_colliding(&views, gripper, TOP_KEPT);
-    }
-    let plan_s = started.elapsed().as_secs_f64();
-    let [view] = views;
-    Ok(SensorPlanReport {
-        camera: view.camera,
-        pose_estimated,
-        camera_elevation_deg: table.theta_rad().to_degrees(),
+    Ok(Located {
+        view,
         table,
         object,
-        object_pixels,
-        candidates: plan.candidates_per_view.iter().sum(),
-        best: plan.best().copied(),
-        top: plan.candidates.iter().take(TOP_KEPT).copied().collect(),
-        rejections: plan.rejections,
-        timings: [0.0, table_s, plan_s],
     })
+}
+
+/// The policy's plan over `views`, hand-checked against all of them unless told not to.
+fn plan_views(
+    policy: &GqcnnPolicy,
+    gripper: &mvgrasp_grasp::Gripper,
+    views: &[View],
+    params: &SensorPlanParams,
+) -> Result<Plan> {
+    let mut plan = policy.plan(views, params.seed)?;
+    if params.hand_check {
+        plan.reject_colliding(views, gripper, TOP_KEPT);
+    }
+    Ok(plan)
 }
 
 /// The view of `files`: its depth with its intrinsics, posed by the pose file (else at the
@@ -239,10 +265,11 @@ fn mismatch(path: &Path, detail: String) -> Error {
 }
 
 /// What [`plan_on_views_dir`] found.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
 pub struct ViewsPlanReport {
-    /// The cameras of `cameras.json`, in view order.
-    pub cameras: Vec<Camera>,
+    /// The views as planned (the cameras of `cameras.json`, each view's object mask), in view
+    /// order.
+    pub views: Vec<View>,
     /// The table fitted in each view (its camera's frame).
     pub tables: Vec<TableFit>,
     /// Where each view's object pixels came from, and how many there are.
@@ -346,23 +373,17 @@ pub fn plan_on_views_dir(
     let mut tables = Vec::new();
     let mut objects = Vec::new();
     for view in read_views_dir(dir)? {
-        let table = fit_table(&view.depth, view.mask.as_ref(), &params.table)?;
-        let (source, view) = if view.mask.is_some() {
-            (ObjectSource::MaskFile, view)
-        } else {
-            let found = objects_above(&view.depth, &table, &params.table)?;
-            (ObjectSource::AboveTheTable, view.with_mask(found)?)
-        };
-        objects.push((source, view.mask.as_ref().map_or(0, Mask::count)));
-        tables.push(table);
-        views.push(view);
+        let located = locate(view, true, params)?;
+        objects.push((
+            located.object,
+            located.view.mask.as_ref().map_or(0, Mask::count),
+        ));
+        tables.push(located.table);
+        views.push(located.view);
     }
-    let mut plan = policy.plan(&views, params.seed)?;
-    if params.hand_check {
-        plan.reject_colliding(&views, gripper, TOP_KEPT);
-    }
+    let plan = plan_views(policy, gripper, &views, params)?;
     Ok(ViewsPlanReport {
-        cameras: views.iter().map(|v| v.camera).collect(),
+        views,
         tables,
         objects,
         candidates_per_view: plan.candidates_per_view.clone(),
