@@ -237,15 +237,12 @@ pub fn write_overlay(
     for &(rank, g) in in_view.iter().rev() {
         let color = GRASP_COLORS.get(rank).copied().unwrap_or([150, 150, 150]);
         let image = &g.image;
-        if image.depth_m <= 0.0 {
+        let Some([a, b]) = image.jaws_px(k.fx) else {
             continue;
-        }
-        let half = image.width_m / 2.0 * k.fx / image.depth_m;
+        };
+        // Each jaw drawn 2 cm long across the axis.
         let jaw = 0.01 * k.fx / image.depth_m;
         let (sin, cos) = image.angle_rad.sin_cos();
-        let [cu, cv] = image.center_px;
-        let contact = |side: f32| [cu + side * half * cos, cv + side * half * sin];
-        let (a, b) = (contact(-1.0), contact(1.0));
         let thick = rank == 0;
         line(a, b, color, false);
         for c in [a, b] {

@@ -81,6 +81,10 @@ impl DepthImage {
     }
 }
 
+/// Pixels within this of an object's mask (along both axes) count as on it: a depth edge, and
+/// so a grasp's contact, lies on either side of the object's outline.
+pub const MASK_MARGIN_PX: u32 = 2;
+
 /// Which pixels of an image are the object (a segmentation mask), row-major.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Mask {
@@ -126,6 +130,12 @@ impl Mask {
     pub fn at(&self, u: i64, v: i64) -> bool {
         let (w, h) = (i64::from(self.width), i64::from(self.height));
         (0..w).contains(&u) && (0..h).contains(&v) && self.pixels[(v * w + u) as usize]
+    }
+
+    /// Whether an object pixel lies within `radius_px` of column `u`, row `v` along both axes.
+    pub fn near(&self, u: i64, v: i64, radius_px: u32) -> bool {
+        let r = i64::from(radius_px);
+        (v - r..=v + r).any(|y| (u - r..=u + r).any(|x| self.at(x, y)))
     }
 
     /// Object pixels.
@@ -268,6 +278,7 @@ mod tests {
         let grown = mask.dilated(1);
         assert_eq!(grown.count(), 9);
         assert!(grown.at(1, 1) && grown.at(3, 3) && !grown.at(0, 2) && !grown.at(4, 4));
+        assert!(mask.near(4, 4, 2) && !mask.near(4, 4, 1) && !mask.near(0, 2, 1));
         assert_eq!(mask.dilated(0), mask);
         assert_eq!(mask.dilated(9).count(), 25);
         assert!(!mask.at(-1, 0) && !mask.at(5, 0));

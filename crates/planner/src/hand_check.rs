@@ -7,7 +7,7 @@ use mvgrasp_geometry::Vec3;
 use mvgrasp_grasp::{Gripper, HandShapes};
 use serde::Serialize;
 
-use crate::depth_image::View;
+use crate::depth_image::{MASK_MARGIN_PX, View};
 use crate::policy::ScoredGrasp;
 
 /// The hand's boxes are grown by this before observed points are tested against them, metres:
@@ -16,10 +16,6 @@ use crate::policy::ScoredGrasp;
 /// can reach that far into a box between the points that are tested; and the physics trial
 /// counts an approach that comes within 0.1 mm of the object as touching it.
 const HAND_CLEARANCE_M: f32 = 0.001;
-
-/// A contact within this many pixels (along both axes) of the object's mask is on it: a depth
-/// edge lies on either side of the object's outline.
-const MASK_MARGIN_PX: u32 = 2;
 
 /// Why a candidate was rejected.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -66,17 +62,20 @@ impl Rejections {
 /// along -z by its approach distance.
 pub fn check_hand(candidate: &ScoredGrasp, views: &[View], gripper: &Gripper) -> Option<Rejection> {
     if let Some(view) = views.get(candidate.view) {
-        let contacts = contact_pixels(candidate, view);
+        // The contacts' pixels; a grasp at no depth has none on the surface.
+        let Some(jaws) = candidate.image.jaws_px(view.depth.intrinsics().fx) else {
+            return Some(Rejection::ContactOffSurface);
+        };
+        let contacts = jaws.map(|[u, v]| [u.round() as i64, v.round() as i64]);
         if !contacts.iter().all(|&[u, v]| view.depth.at(u, v) > 0.0) {
             return Some(Rejection::ContactOffSurface);
         }
-        if let Some(mask) = &view.mask {
-            let r = i64::from(MASK_MARGIN_PX);
-            let on_object =
-                |[u, v]: [i64; 2]| (v - r..=v + r).any(|y| (u - r..=u + r).any(|x| mask.at(x, y)));
-            if !contacts.iter().all(|&c| on_object(c)) {
-                return Some(Rejection::ContactOffObject);
-            }
+        if let Some(mask) = &view.mask
+            && !contacts
+                .iter()
+                .all(|&[u, v]| mask.near(u, v, MASK_MARGIN_PX))
+        {
+            return Some(Rejection::ContactOffObject);
         }
     }
     let hand = HandShapes::new(
@@ -89,26 +88,6 @@ pub fn check_hand(candidate: &ScoredGrasp, views: &[View], gripper: &Gripper) ->
         .iter()
         .any(|view| meets_observed_depth(&hand, &gripper_from_world, view))
         .then_some(Rejection::HandMeetsObservedDepth)
-}
-
-/// The two contact pixels: the grasp's width apart along its axis, at its depth (none for a
-/// grasp at no depth).
-fn contact_pixels(candidate: &ScoredGrasp, view: &View) -> Vec<[i64; 2]> {
-    let image = &candidate.image;
-    let k = view.depth.intrinsics();
-    if image.depth_m <= 0.0 {
-        return vec![[-1, -1]];
-    }
-    let half_px = image.width_m / 2.0 * k.fx / image.depth_m;
-    let (sin, cos) = image.angle_rad.sin_cos();
-    [-1.0f32, 1.0]
-        .iter()
-        .map(|side| {
-            let u = image.center_px[0] + side * half_px * cos;
-            let v = image.center_px[1] + side * half_px * sin;
-            [u.round() as i64, v.round() as i64]
-        })
-        .collect()
 }
 
 /// Whether a point `view` observed lies inside one of the hand's boxes grown by

@@ -14,7 +14,7 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::depth_image::{DepthImage, Mask};
+use crate::depth_image::{DepthImage, MASK_MARGIN_PX, Mask};
 
 /// Parameters of [`sample_image_grasps`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -110,10 +110,6 @@ impl EdgeMap {
             .collect()
     }
 }
-
-/// Pixels of the mask's edge this close to an edge pixel count as the object's: a depth edge
-/// lies on either side of the object's outline.
-const MASK_MARGIN_PX: u32 = 2;
 
 /// Grasp candidates in `depth` for a gripper that opens `max_width_m`; deterministic from
 /// `seed`. An image with no edges gives none. Missing pixels (0) are never edges: an edge
