@@ -18,25 +18,81 @@ use crate::shared_data::shared_data;
 
 /// How far the grasp's centre lies from the object, in the table plane: the distance from it
 /// to the nearest of the mask's points, both projected onto the table, metres.
-fn distance_to_object(
-    files: &SensorFiles,
-    camera: &mvgrasp::geometry::Camera,
-    centre: Vec3,
-) -> f32 {
+fn distance_to_object(files: &SensorFiles, camera: &Camera, centre: Vec3) -> f32 {
     let view = read_view(files).unwrap();
     let mask = view.mask.as_ref().unwrap();
-    let k = view.depth.intrinsics();
+    nearest_in_plane(&view.depth, camera, centre, |u, v, _| mask.at(u, v))
+}
+
+/// The distance in the world's xy plane from `centre` to the nearest point that `depth`
+/// (seen through `camera`) shows at a pixel `on_object` accepts (it gets the pixel and the
+/// world point), metres.
+fn nearest_in_plane(
+    depth: &DepthImage,
+    camera: &Camera,
+    centre: Vec3,
+    on_object: impl Fn(i64, i64, Vec3) -> bool,
+) -> f32 {
+    let k = depth.intrinsics();
     let mut nearest = f32::INFINITY;
-    for v in 0..k.height {
-        for u in 0..k.width {
-            let d = view.depth.at(i64::from(u), i64::from(v));
-            if d > 0.0 && mask.at(i64::from(u), i64::from(v)) {
-                let p = camera.unproject(u as f32, v as f32, d);
+    for v in 0..i64::from(k.height) {
+        for u in 0..i64::from(k.width) {
+            let d = depth.at(u, v);
+            let p = camera.unproject(u as f32, v as f32, d);
+            if d > 0.0 && on_object(u, v, p) {
                 nearest = nearest.min((p.x - centre.x).hypot(p.y - centre.y));
             }
         }
     }
     nearest
+}
+
+/// A plain JSON intrinsics file of `k` at `dir/name`.
+fn write_intrinsics(dir: &Path, name: &str, k: &Intrinsics) -> std::path::PathBuf {
+    let path = dir.join(name);
+    std::fs::write(
+        &path,
+        format!(
+            r#"{{"K": [[{}, 0, {}], [0, {}, {}], [0, 0, 1]], "width": {}, "height": {}}}"#,
+            k.fx, k.cx, k.fy, k.cy, k.width, k.height
+        ),
+    )
+    .unwrap();
+    path
+}
+
+/// A 16-bit millimetre depth PNG of `values` (metres).
+fn write_depth_png(path: &Path, width: u32, height: u32, values: &[f32]) {
+    let file = std::fs::File::create(path).unwrap();
+    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
+    encoder.set_color(png::ColorType::Grayscale);
+    encoder.set_depth(png::BitDepth::Sixteen);
+    let data: Vec<u8> = values
+        .iter()
+        .flat_map(|&d| ((d * 1000.0).round() as u16).to_be_bytes())
+        .collect();
+    encoder
+        .write_header()
+        .unwrap()
+        .write_image_data(&data)
+        .unwrap();
+}
+
+/// A box `half_m` (x, y half extents) and 5 cm tall on a table 0.7 m below a Primesense
+/// looking straight down, as its depth image.
+fn box_depth(half_m: [f32; 2]) -> Vec<f32> {
+    let k = Intrinsics::preset(IntrinsicsPreset::Primesense);
+    (0..k.width * k.height)
+        .map(|i| {
+            let (u, v) = ((i % k.width) as f32, (i / k.width) as f32);
+            let (x, y) = ((u - k.cx) * 0.65 / k.fx, (v - k.cy) * 0.65 / k.fy);
+            if x.abs() < half_m[0] && y.abs() < half_m[1] {
+                0.65
+            } else {
+                0.7
+            }
+        })
+        .collect()
 }
 
 #[test]
@@ -146,15 +202,7 @@ fn oblique_rendered_views_find_the_table_and_a_grasp_with_the_pose_withheld() {
     };
     let dir = tempfile::tempdir().unwrap();
     let k = Intrinsics::preset(IntrinsicsPreset::Primesense);
-    let intrinsics = dir.path().join("camera.json");
-    std::fs::write(
-        &intrinsics,
-        format!(
-            r#"{{"K": [[{}, 0, {}], [0, {}, {}], [0, 0, 1]], "width": {}, "height": {}}}"#,
-            k.fx, k.cx, k.fy, k.cy, k.width, k.height
-        ),
-    )
-    .unwrap();
+    let intrinsics = write_intrinsics(dir.path(), "camera.json", &k);
     let object = generate_object(Category::Box, 0, 0).unwrap();
     let rest = RestingPoses::of(&object.mesh).unwrap();
     let (_, pose) = rest.get(0).unwrap();
@@ -169,7 +217,7 @@ fn oblique_rendered_views_find_the_table_and_a_grasp_with_the_pose_withheld() {
             .unwrap()
             .remove(0);
         let path = dir.path().join("depth.png");
-        write_depth_png_values(&path, k.width, k.height, depth.as_slice());
+        write_depth_png(&path, k.width, k.height, depth.as_slice());
         let files = SensorFiles {
             depth: path,
             intrinsics: intrinsics.clone(),
@@ -200,55 +248,13 @@ fn oblique_rendered_views_find_the_table_and_a_grasp_with_the_pose_withheld() {
             .camera_from_world()
             .transform_point(best.grasp.center());
         let centre = camera.world_from_camera.transform_point(in_camera);
-        let mut nearest = f32::INFINITY;
-        for v in 0..k.height {
-            for u in 0..k.width {
-                let d = depth.at(i64::from(u), i64::from(v));
-                let p = camera.unproject(u as f32, v as f32, d);
-                if d > 0.0 && p.z > 0.005 {
-                    nearest = nearest.min((p.x - centre.x).hypot(p.y - centre.y));
-                }
-            }
-        }
+        let nearest = nearest_in_plane(&depth, &camera, centre, |_, _, p| p.z > 0.005);
         assert!(
             nearest < 0.015,
             "{elevation_deg} deg: the grasp's centre is {:.1} cm from the box",
             nearest * 100.0
         );
     }
-}
-
-/// A 16-bit millimetre depth PNG of `values` (metres).
-fn write_depth_png_values(path: &Path, width: u32, height: u32, values: &[f32]) {
-    let file = std::fs::File::create(path).unwrap();
-    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
-    encoder.set_color(png::ColorType::Grayscale);
-    encoder.set_depth(png::BitDepth::Sixteen);
-    let data: Vec<u8> = values
-        .iter()
-        .flat_map(|&d| ((d * 1000.0).round() as u16).to_be_bytes())
-        .collect();
-    encoder
-        .write_header()
-        .unwrap()
-        .write_image_data(&data)
-        .unwrap();
-}
-
-/// A 16-bit millimetre depth PNG of `width` x `height` pixels all at `value_mm`.
-fn write_depth_png(path: &Path, width: u32, height: u32, value_mm: u16) {
-    let file = std::fs::File::create(path).unwrap();
-    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
-    encoder.set_color(png::ColorType::Grayscale);
-    encoder.set_depth(png::BitDepth::Sixteen);
-    let data: Vec<u8> = (0..width * height)
-        .flat_map(|_| value_mm.to_be_bytes())
-        .collect();
-    encoder
-        .write_header()
-        .unwrap()
-        .write_image_data(&data)
-        .unwrap();
 }
 
 /// The CLI on a synthetic sensor image (a 4 x 4 x 5 cm box on a table 0.7 m below a camera
@@ -258,27 +264,13 @@ fn write_depth_png(path: &Path, width: u32, height: u32, value_mm: u16) {
 fn plan_on_depth_writes_grasps_json_and_an_overlay() {
     let dir = tempfile::tempdir().unwrap();
     let k = Intrinsics::preset(IntrinsicsPreset::Primesense);
-    let intrinsics = dir.path().join("camera.json");
-    std::fs::write(
-        &intrinsics,
-        r#"{"K": [[525, 0, 319.5], [0, 525, 239.5], [0, 0, 1]], "width": 640, "height": 480}"#,
-    )
-    .unwrap();
-    let scene = |half_m: f32| -> Vec<f32> {
-        (0..k.width * k.height)
-            .map(|i| {
-                let (u, v) = ((i % k.width) as f32, (i / k.width) as f32);
-                let (x, y) = ((u - k.cx) * 0.65 / k.fx, (v - k.cy) * 0.65 / k.fy);
-                if x.abs() < half_m && y.abs() < half_m {
-                    0.65
-                } else {
-                    0.7
-                }
-            })
-            .collect()
-    };
+    let intrinsics = write_intrinsics(
+        dir.path(),
+        "camera.json",
+        &Intrinsics::preset(IntrinsicsPreset::Primesense),
+    );
     let depth = dir.path().join("depth.png");
-    write_depth_png_values(&depth, k.width, k.height, &scene(0.02));
+    write_depth_png(&depth, k.width, k.height, &box_depth([0.02, 0.02]));
     let out = dir.path().join("out");
     let run = |extra: &[&str]| {
         Command::new(env!("CARGO_BIN_EXE_plan"))
@@ -379,7 +371,7 @@ fn plan_on_depth_writes_grasps_json_and_an_overlay() {
     );
     // A box wider than the gripper opens: no grasp, exit code 3, the folder still written.
     std::fs::remove_dir_all(&out).unwrap();
-    write_depth_png_values(&depth, k.width, k.height, &scene(0.06));
+    write_depth_png(&depth, k.width, k.height, &box_depth([0.06, 0.06]));
     let none = run(&[]);
     assert_eq!(
         none.status.code(),
@@ -448,18 +440,7 @@ fn plan_over_a_rendered_views_folder() {
     let top = &views[0];
     let mask = top.mask.as_ref().unwrap();
     let k = top.depth.intrinsics();
-    let mut nearest = f32::INFINITY;
-    for v in 0..k.height {
-        for u in 0..k.width {
-            let (ui, vi) = (i64::from(u), i64::from(v));
-            if mask.at(ui, vi) {
-                let q = top
-                    .camera
-                    .unproject(u as f32, v as f32, top.depth.at(ui, vi));
-                nearest = nearest.min((q.x - centre.x).hypot(q.y - centre.y));
-            }
-        }
-    }
+    let nearest = nearest_in_plane(&top.depth, &top.camera, centre, |u, v, _| mask.at(u, v));
     assert!(
         nearest < 0.015,
         "the grasp is {:.1} cm from the box",
@@ -474,16 +455,8 @@ fn plan_over_a_rendered_views_folder() {
 
     // One view of the folder through --depth: its PNG read in the dataset's 0.1 mm units
     // (not millimetres: the table would be 5 m away), its mask's object alone.
-    let intrinsics = dir.path().join("phoxi.json");
-    let k = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
-    std::fs::write(
-        &intrinsics,
-        format!(
-            r#"{{"K": [[{}, 0, {}], [0, {}, {}], [0, 0, 1]], "width": {}, "height": {}}}"#,
-            k.fx, k.cx, k.fy, k.cy, k.width, k.height
-        ),
-    )
-    .unwrap();
+    // Its intrinsics are those of the folder's top-down camera, written as a plain JSON.
+    let intrinsics = write_intrinsics(dir.path(), "camera.json", k);
     let single = Command::new(env!("CARGO_BIN_EXE_plan"))
         .args(["--depth", views_dir.join("000_depth.png").to_str().unwrap()])
         .args(["--intrinsics", intrinsics.to_str().unwrap()])
@@ -545,25 +518,10 @@ fn plan_over_a_rendered_views_folder() {
 fn a_view_in_memory_plans_as_its_files_do() {
     let dir = tempfile::tempdir().unwrap();
     let k = Intrinsics::preset(IntrinsicsPreset::Primesense);
-    let depth: Vec<f32> = (0..k.width * k.height)
-        .map(|i| {
-            let (u, v) = ((i % k.width) as f32, (i / k.width) as f32);
-            let (x, y) = ((u - k.cx) * 0.65 / k.fx, (v - k.cy) * 0.65 / k.fy);
-            if x.abs() < 0.02 && y.abs() < 0.03 {
-                0.65
-            } else {
-                0.7
-            }
-        })
-        .collect();
+    let depth = box_depth([0.02, 0.03]);
     let path = dir.path().join("depth.png");
-    write_depth_png_values(&path, k.width, k.height, &depth);
-    let intrinsics = dir.path().join("camera.json");
-    std::fs::write(
-        &intrinsics,
-        r#"{"K": [[525, 0, 319.5], [0, 525, 239.5], [0, 0, 1]], "width": 640, "height": 480}"#,
-    )
-    .unwrap();
+    write_depth_png(&path, k.width, k.height, &depth);
+    let intrinsics = write_intrinsics(dir.path(), "camera.json", &k);
     let gripper = PlanParams::default().labels.gripper().unwrap();
     let policy =
         GqcnnPolicy::new(models::GQCNN_TOPDOWN.load().unwrap(), gripper.max_opening_m).unwrap();
@@ -593,12 +551,12 @@ fn a_view_in_memory_plans_as_its_files_do() {
 fn bad_sensor_files_are_one_clear_line_naming_the_file() {
     let dir = tempfile::tempdir().unwrap();
     let depth = dir.path().join("depth.png");
-    let intr = dir.path().join("camera.json");
-    std::fs::write(
-        &intr,
-        r#"{"K": [[525, 0, 319.5], [0, 525, 239.5], [0, 0, 1]], "width": 640, "height": 480}"#,
-    )
-    .unwrap();
+    let intr = write_intrinsics(
+        dir.path(),
+        "camera.json",
+        &Intrinsics::preset(IntrinsicsPreset::Primesense),
+    );
+    let flat = vec![0.7f32; 640 * 480];
     let plan = |extra: &[&str]| {
         let out = Command::new(env!("CARGO_BIN_EXE_plan"))
             .args(["--depth", depth.to_str().unwrap()])
@@ -612,31 +570,31 @@ fn bad_sensor_files_are_one_clear_line_naming_the_file() {
         err
     };
     // Intrinsics for another size.
-    write_depth_png(&depth, 320, 240, 700);
+    write_depth_png(&depth, 320, 240, &[0.7; 320 * 240]);
     let err = plan(&[]);
     assert!(
         err.contains("camera.json") && err.contains("640 x 480") && err.contains("320 x 240"),
         "{err}"
     );
     // A flat table with nothing on it; all missing; a mask of the wrong size.
-    write_depth_png(&depth, 640, 480, 700);
+    write_depth_png(&depth, 640, 480, &flat);
     assert!(
         plan(&[]).contains("nothing stands on the table"),
         "{}",
         plan(&[])
     );
     let mask = dir.path().join("mask.png");
-    write_depth_png(&mask, 64, 48, 1);
+    write_depth_png(&mask, 64, 48, &[0.001; 64 * 48]);
     let err = plan(&["--mask", mask.to_str().unwrap()]);
     assert!(err.contains("mask.png") && err.contains("64 x 48"), "{err}");
-    write_depth_png(&depth, 640, 480, 0);
+    write_depth_png(&depth, 640, 480, &[0.0; 640 * 480]);
     let err = plan(&[]);
     assert!(
         err.contains("depth.png") && err.contains("no valid depth"),
         "{err}"
     );
     // A pose that is not rigid.
-    write_depth_png(&depth, 640, 480, 700);
+    write_depth_png(&depth, 640, 480, &flat);
     let pose = dir.path().join("pose.json");
     std::fs::write(
         &pose,
