@@ -54,11 +54,11 @@ struct Stages {
     scored: usize,
 }
 
-fn plan_once(policy: &GqcnnPolicy, files: &[SensorFiles]) -> Result<Stages, String> {
-    let gripper = PlanParams::default()
-        .labels
-        .gripper()
-        .map_err(|e| e.to_string())?;
+fn plan_once(
+    policy: &GqcnnPolicy,
+    gripper: &mvgrasp::grasp::Gripper,
+    files: &[SensorFiles],
+) -> Result<Stages, String> {
     let mut s = Stages::default();
     let t = Instant::now();
     let read: Vec<View> = files
@@ -102,7 +102,7 @@ fn plan_once(policy: &GqcnnPolicy, files: &[SensorFiles]) -> Result<Stages, Stri
     s.plan = t.elapsed().as_secs_f64();
     s.scored = plan.candidates.len();
     let t = Instant::now();
-    plan.reject_colliding(&views, &gripper, 10);
+    plan.reject_colliding(&views, gripper, 10);
     s.check = t.elapsed().as_secs_f64();
     Ok(s)
 }
@@ -152,9 +152,9 @@ fn run(args: &Args) -> Result<(), String> {
         policy.cem = cem.then(CemParams::default);
         for views in [1usize, 5] {
             let mut runs = Vec::new();
-            plan_once(&policy, &files[..views])?; // warm-up
+            plan_once(&policy, &gripper, &files[..views])?; // warm-up
             for _ in 0..args.runs {
-                runs.push(plan_once(&policy, &files[..views])?);
+                runs.push(plan_once(&policy, &gripper, &files[..views])?);
             }
             let m = |f: fn(&Stages) -> f64| 1000.0 * median(runs.iter().map(f).collect());
             let total = m(|s| s.load + s.table + s.plan + s.check);

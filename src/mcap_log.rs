@@ -24,7 +24,10 @@ pub const TF_TOPIC: &str = "/tf";
 /// See [`GRASPS_TOPIC`].
 pub const TABLE_TOPIC: &str = "/table";
 
-const TIME: fn() -> Value = || json!({"sec": 0, "nsec": 0});
+/// Every message's timestamp: 0 (a plan has no clock; the same plan, the same bytes).
+fn time() -> Value {
+    json!({"sec": 0, "nsec": 0})
+}
 
 fn schema(properties: Value) -> Vec<u8> {
     json!({"type": "object", "properties": properties})
@@ -131,7 +134,7 @@ pub fn write_plan_log(
                 depth,
                 0,
                 json!({
-                    "timestamp": TIME(), "frame_id": frame, "width": k.width, "height": k.height,
+                    "timestamp": time(), "frame_id": frame, "width": k.width, "height": k.height,
                     "encoding": "32FC1", "step": 4 * k.width,
                     "data": base64::engine::general_purpose::STANDARD.encode(&bytes),
                 }),
@@ -149,7 +152,7 @@ pub fn write_plan_log(
                 calibration,
                 0,
                 json!({
-                    "timestamp": TIME(), "frame_id": frame, "width": k.width, "height": k.height,
+                    "timestamp": time(), "frame_id": frame, "width": k.width, "height": k.height,
                     "distortion_model": "plumb_bob", "D": [0.0, 0.0, 0.0, 0.0, 0.0],
                     "K": [k.fx, 0.0, k.cx, 0.0, k.fy, k.cy, 0.0, 0.0, 1.0],
                     "R": [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
@@ -159,7 +162,7 @@ pub fn write_plan_log(
             .map_err(io)?;
             let p = pose_json(&view.camera.world_from_camera);
             transforms.push(json!({
-                "timestamp": TIME(), "parent_frame_id": "world", "child_frame_id": frame,
+                "timestamp": time(), "parent_frame_id": "world", "child_frame_id": frame,
                 "translation": p["position"], "rotation": p["orientation"],
             }));
         }
@@ -185,7 +188,7 @@ pub fn write_plan_log(
                 }))
                 .map_err(io)?;
                 write(&mut writer, channel_id, 0, json!({
-                    "timestamp": TIME(), "frame_id": "camera_0", "pose": pose_json(&camera_from_table),
+                    "timestamp": time(), "frame_id": "camera_0", "pose": pose_json(&camera_from_table),
                 }))
                 .map_err(io)?;
             }
@@ -209,7 +212,7 @@ pub fn write_plan_log(
             poses,
             0,
             json!({
-                "timestamp": TIME(), "frame_id": "world", "poses": grasp_poses,
+                "timestamp": time(), "frame_id": "world", "poses": grasp_poses,
             }),
         )
         .map_err(io)?;

@@ -510,6 +510,19 @@ fn plan_over_a_rendered_views_folder() {
         err.contains("cameras.json") && err.contains("no camera"),
         "{err}"
     );
+    // A dataset manifest that cannot be read: its depth units are not guessed.
+    std::fs::write(dir.path().join("dataset.json"), "not json").unwrap();
+    let files = SensorFiles {
+        depth: views_dir.join("000_depth.png"),
+        intrinsics,
+        camera_pose: None,
+        mask: None,
+    };
+    let err = read_view(&files).map(|_| ()).unwrap_err().to_string();
+    assert!(
+        err.contains("dataset.json") && err.contains("units"),
+        "{err}"
+    );
 }
 
 /// An in-memory view (a robot's depth stream) plans the same grasps as the same image read

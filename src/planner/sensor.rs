@@ -200,7 +200,7 @@ fn plan_views(
 /// See [`plan_on_sensor_depth`].
 pub fn read_view(files: &SensorFiles) -> Result<View> {
     // A PNG inside a `render` dataset is in its units (0.1 mm), its masks in its ids.
-    let (units, object_id) = render_conventions(files.depth.parent().unwrap_or(Path::new(".")));
+    let (units, object_id) = render_conventions(files.depth.parent().unwrap_or(Path::new(".")))?;
     let depth = read_depth_in_units(&files.depth, units)?;
     let intrinsics = Intrinsics::from_file(&files.intrinsics)?;
     if (intrinsics.width, intrinsics.height) != (depth.width, depth.height) {
@@ -239,22 +239,28 @@ pub fn read_view(files: &SensorFiles) -> Result<View> {
 /// The PNG depth units and the object's mask value of the `render` dataset that `dir` is in
 /// (its `dataset.json` in `dir` or up to two folders above): `(1000, None)` (millimetres, any
 /// non-zero mask pixel) when there is none.
-fn render_conventions(dir: &Path) -> (f32, Option<u8>) {
-    let manifest = [dir.to_path_buf(), dir.join(".."), dir.join("../..")]
+///
+/// # Errors
+/// A `dataset.json` that cannot be read as JSON (its units would be guessed).
+fn render_conventions(dir: &Path) -> Result<(f32, Option<u8>)> {
+    let Some(path) = [dir.to_path_buf(), dir.join(".."), dir.join("../..")]
         .into_iter()
         .map(|d| d.join("dataset.json"))
         .find(|p| p.is_file())
-        .and_then(|p| std::fs::read_to_string(p).ok())
-        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
-    let units = manifest
-        .as_ref()
-        .and_then(|m| m["depth_png_units_per_m"].as_f64())
+    else {
+        return Ok((1000.0, None));
+    };
+    let manifest: serde_json::Value = std::fs::read_to_string(&path)
+        .map_err(|e| e.to_string())
+        .and_then(|t| serde_json::from_str(&t).map_err(|e| e.to_string()))
+        .map_err(|e| mismatch(&path, format!("cannot read the dataset's units: {e}")))?;
+    let units = manifest["depth_png_units_per_m"]
+        .as_f64()
         .map_or(1000.0, |u| u as f32);
-    let object_id = manifest
-        .as_ref()
-        .and_then(|m| m["mask_ids"]["object"].as_u64())
+    let object_id = manifest["mask_ids"]["object"]
+        .as_u64()
         .and_then(|id| u8::try_from(id).ok());
-    (units, object_id)
+    Ok((units, object_id))
 }
 
 fn mismatch(path: &Path, detail: String) -> Error {
@@ -304,7 +310,7 @@ pub fn read_views_dir(dir: &Path) -> Result<Vec<View>> {
     if cameras.is_empty() {
         return Err(mismatch(&cameras_path, "no camera".into()));
     }
-    let (units, object_id) = render_conventions(dir);
+    let (units, object_id) = render_conventions(dir)?;
     // Depth images past the cameras' count: the folder and its cameras disagree.
     let extra = dir.join(format!("{:03}_depth.npy", cameras.len()));
     let extra_png = dir.join(format!("{:03}_depth.png", cameras.len()));
