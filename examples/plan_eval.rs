@@ -12,9 +12,15 @@
 //! `--camera` renders every view with another camera's intrinsics: the planner scales its
 //! crops to the camera (the network's input contract), and this measures what that keeps.
 //!
-//! Policies: the multi-view GQ-CNN over the paper's 10 test views (`plan`'s default), the
-//! same network with the top-down view alone, and the top-down GQ-CNN with the top-down view
-//! alone, 0.7 m above the object (Dex-Net 2.0's setting and its training distance).
+//! Policies (`--policy`, repeated; all by default):
+//! - `topdown`: the top-down GQ-CNN with the top-down view alone, 0.7 m above the object
+//!   (Dex-Net 2.0's setting and its training distance);
+//! - `per-view`: the multi-view GQ-CNN over the paper's 10 test views, each view planned on
+//!   its own (the seed paper's policy);
+//! - `fused-3`, `fused-5`, `fused-10`: the multi-view planner: 3, 5 or 10 views on the
+//!   hemisphere (the first top-down) fused, every candidate checked against the fused model
+//!   (the open hand must stay out of space no view saw), the best re-scored on virtual views
+//!   along their approach axes (`--rescore`).
 
 mod common;
 
@@ -30,7 +36,8 @@ use mvgrasp::grasp::GraspObject;
 use mvgrasp::grasp::physics::FailureStage;
 use mvgrasp::infer::Gqcnn;
 use mvgrasp::planner::{
-    CemParams, GqcnnPolicy, PlanParams, ShippedModel, check_grasps, models, plan_grasp,
+    CemParams, FusionParams, GqcnnPolicy, PlanParams, ShippedModel, VirtualScorer, check_grasps,
+    models, plan_grasp,
 };
 use mvgrasp::render::{Backend, Renderer};
 
@@ -80,6 +87,101 @@ struct Args {
     /// The top-down GQ-CNN's network from this export (`NAME.json`) instead of the shipped one.
     #[arg(long)]
     gqcnn: Option<PathBuf>,
+    /// The policies (topdown, per-view, fused-3, fused-5, fused-10); all when none is given.
+    #[arg(long = "policy")]
+    policies: Vec<String>,
+    /// The first built-in object index of each category (30: the report set; 50: the
+    /// development set the fused planner's settings were chosen on).
+    #[arg(long, default_value_t = 30)]
+    first_index: u32,
+    /// The network that re-scores the fused policies' best candidates on virtual views:
+    /// gqcnn (the top-down GQ-CNN), mvgqcnn, or none (rank by the multi-view GQ-CNN's score
+    /// on the view the candidate came from).
+    #[arg(long, default_value = "gqcnn")]
+    rescore: String,
+    /// Candidates re-scored per view.
+    #[arg(long, default_value_t = 10)]
+    rescore_candidates: usize,
+    /// Perturbed copies averaged into each re-score (0: the candidate alone).
+    #[arg(long, default_value_t = 0)]
+    perturbations: usize,
+    /// The fused policies' hand check lets the hand into space no view has seen.
+    #[arg(long)]
+    allow_unknown: bool,
+}
+
+/// A policy of the evaluation: its label, network, views, their distance, and whether the
+/// views are fused.
+struct Policy {
+    label: String,
+    model: ShippedModel,
+    views: usize,
+    radius_m: f32,
+    fused: bool,
+}
+
+/// The policies named on the command line (all without names, the top-down one alone with
+/// --top-down-only).
+fn policies(args: &Args) -> Result<Vec<Policy>, String> {
+    let names: Vec<&str> = if args.top_down_only {
+        vec!["topdown"]
+    } else if args.policies.is_empty() {
+        vec!["topdown", "per-view", "fused-3", "fused-5", "fused-10"]
+    } else {
+        args.policies.iter().map(String::as_str).collect()
+    };
+    names
+        .into_iter()
+        .map(|name| {
+            Ok(match name {
+                "topdown" => Policy {
+                    label: "GQ-CNN, top-down".into(),
+                    model: models::GQCNN_TOPDOWN,
+                    views: 1,
+                    radius_m: 0.7,
+                    fused: false,
+                },
+                "per-view" => Policy {
+                    label: "MV-GQ-CNN, 10 views".into(),
+                    model: models::MVGQCNN,
+                    views: 10,
+                    radius_m: args.mv_radius_m,
+                    fused: false,
+                },
+                _ => {
+                    let views = name
+                        .strip_prefix("fused-")
+                        .and_then(|n| n.parse::<usize>().ok())
+                        .filter(|&n| n > 0)
+                        .ok_or_else(|| {
+                            format!(
+                                "--policy {name}: expected topdown, per-view or fused-N (N views)"
+                            )
+                        })?;
+                    Policy {
+                        label: format!("fused, {views} views"),
+                        model: models::MVGQCNN,
+                        views,
+                        radius_m: args.mv_radius_m,
+                        fused: true,
+                    }
+                }
+            })
+        })
+        .collect()
+}
+
+/// The upper ends of the approach-tilt bins but the last, degrees from straight down.
+const TILT_BINS_DEG: [f32; 2] = [15.0, 45.0];
+
+/// One category's share of a tally.
+#[derive(Default, Clone, Copy)]
+struct Group {
+    planned: usize,
+    /// Sum of the chosen grasps' predicted quality.
+    quality: f64,
+    held: usize,
+    tried: usize,
 }
 
 #[derive(Default)]
@@ -94,8 +196,10 @@ struct Tally {
     seconds: f64,
     /// With --top10: per object, the share of its top choices (up to 10) that held.
     top10: Vec<f64>,
-    /// Per category (the real meshes as one): (held, tried).
-    by_group: BTreeMap<&'static str, (usize, usize)>,
+    /// Per category (the real meshes as one).
+    by_group: BTreeMap<&'static str, Group>,
+    /// (held, tried) by the chosen approach's tilt from straight down ([`TILT_BINS_DEG`]).
+    by_tilt: [(usize, usize); 3],
 }
 
 fn main() -> ExitCode {
@@ -106,7 +210,7 @@ fn run(args: &Args) -> Result<(), String> {
     // (name, group, mesh): the group is the category, or "real meshes".
     let mut objects: Vec<(String, &'static str, TriangleMesh)> = Vec::new();
     for category in Category::ALL {
-        for index in 30..30 + args.per_category {
+        for index in args.first_index..args.first_index + args.per_category {
             let o = generate(category, index, 0).map_err(|e| e.to_string())?;
             objects.push((o.name, category.name(), o.mesh));
         }
@@ -123,18 +227,7 @@ fn run(args: &Args) -> Result<(), String> {
     }
     let preset: IntrinsicsPreset = args.camera.parse().map_err(|e| format!("--camera: {e}"))?;
     let renderer = Renderer::new(Backend::Auto).map_err(|e| e.to_string())?;
-    // (label, network, views, camera distance): `plan`'s settings (ViewSetting). The top-down
-    // GQ-CNN, like Dex-Net 2.0's, only knows the distances it was trained at (0.65 to 0.75 m).
-    let policies: [(&str, ShippedModel, usize, f32); 3] = [
-        ("MV-GQ-CNN, 10 views", models::MVGQCNN, 10, args.mv_radius_m),
-        ("MV-GQ-CNN, top-down", models::MVGQCNN, 1, args.mv_radius_m),
-        ("GQ-CNN, top-down", models::GQCNN_TOPDOWN, 1, 0.7),
-    ];
-    let policies = if args.top_down_only {
-        &policies[2..]
-    } else {
-        &policies[..]
-    };
+    let policies = policies(args)?;
     println!(
         "camera: {} (every view), crops {}",
         preset.name(),
@@ -144,27 +237,55 @@ fn run(args: &Args) -> Result<(), String> {
             "scaled to the camera's focal length"
         }
     );
+    let rescorer = match args.rescore.as_str() {
+        "none" => None,
+        "gqcnn" => Some(models::GQCNN_TOPDOWN),
+        "mvgqcnn" => Some(models::MVGQCNN),
+        other => {
+            return Err(format!(
+                "--rescore {other}: expected gqcnn, mvgqcnn or none"
+            ));
+        }
+    };
     // Each policy's settings, gripper and network, prepared once for every object.
     let mut prepared = Vec::new();
-    for (_, model, views, radius_m) in policies {
+    for p in &policies {
         let mut params = PlanParams {
-            max_views: *views,
+            max_views: p.views,
             intrinsics: Intrinsics::preset(preset),
             hand_check: !args.no_hand_check,
             ..Default::default()
         };
         params.labels.physics_shape.shell = args.shell;
         params.labels.physics.grip_true_surface = args.grip_surface;
-        params.views.radius_m = *radius_m;
+        params.views.radius_m = p.radius_m;
+        if p.fused {
+            // The views spread over the whole cap, not the first of ten.
+            params.views.count = p.views;
+            params.fusion = Some(FusionParams {
+                allow_unknown: args.allow_unknown,
+                ..Default::default()
+            });
+        }
         let gripper = params.labels.gripper().map_err(|e| e.to_string())?;
-        let net = match (&args.gqcnn, model.name == models::GQCNN_TOPDOWN.name) {
-            (Some(path), true) => Gqcnn::load(path).map_err(|e| e.to_string())?,
-            _ => model.load().map_err(|e| e.to_string())?,
-        };
-        let mut policy = GqcnnPolicy::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
+        let load =
+            |model: ShippedModel| match (&args.gqcnn, model.name == models::GQCNN_TOPDOWN.name) {
+                (Some(path), true) => Gqcnn::load(path).map_err(|e| e.to_string()),
+                _ => model.load().map_err(|e| e.to_string()),
+            };
+        let mut policy =
+            GqcnnPolicy::new(load(p.model)?, gripper.max_opening_m).map_err(|e| e.to_string())?;
         policy.cem = args.cem.then(CemParams::default);
         if args.unscaled_crops {
             policy.contract.focal_px = params.intrinsics.fx;
+        }
+        if p.fused
+            && let Some(model) = rescorer
+        {
+            let mut scorer = VirtualScorer::new(load(model)?);
+            scorer.params.candidates_per_view = args.rescore_candidates;
+            scorer.params.perturbations = args.perturbations;
+            policy.virtual_scorer = Some(scorer);
         }
         prepared.push((params, gripper, policy));
     }
@@ -179,7 +300,7 @@ fn run(args: &Args) -> Result<(), String> {
             .then(|| GraspObject::new(mesh.clone()))
             .transpose()
             .map_err(|e| e.to_string())?;
-        for (((label, ..), (params, gripper, policy)), tally) in
+        for ((Policy { label, .. }, (params, gripper, policy)), tally) in
             policies.iter().zip(&prepared).zip(&mut tallies)
         {
             let report = match plan_grasp(&renderer, mesh, policy, params) {
@@ -208,8 +329,10 @@ fn run(args: &Args) -> Result<(), String> {
             tally.tried += usize::from(settled);
             tally.held += usize::from(held);
             let in_group = tally.by_group.entry(group).or_default();
-            in_group.0 += usize::from(held);
-            in_group.1 += usize::from(settled);
+            in_group.planned += 1;
+            in_group.quality += f64::from(best.quality);
+            in_group.held += usize::from(held);
+            in_group.tried += usize::from(settled);
             let physics = report
                 .physics
                 .map_or("-".to_string(), |p| match p.failed_at {
@@ -240,8 +363,16 @@ fn run(args: &Args) -> Result<(), String> {
             } else {
                 String::new()
             };
+            // The approach's angle from straight down.
+            let tilt_deg = (-best.grasp.approach().z)
+                .clamp(-1.0, 1.0)
+                .acos()
+                .to_degrees();
+            let bin = TILT_BINS_DEG.iter().take_while(|&&b| tilt_deg > b).count();
+            tally.by_tilt[bin].0 += usize::from(held);
+            tally.by_tilt[bin].1 += usize::from(settled);
             println!(
-                "{name:<30} {label:<22} {:>7.3}  {:>4}  {:>6}  {physics}{top10}",
+                "{name:<30} {label:<22} {:>7.3}  {:>4}  {:>6}  tilt {tilt_deg:>4.0}  {physics}{top10}",
                 best.quality,
                 if free { "yes" } else { "no" },
                 if robust { "yes" } else { "no" }
@@ -257,7 +388,7 @@ fn run(args: &Args) -> Result<(), String> {
         let (lo, hi) = wilson_95(k, n);
         format!("{:.0}-{:.0}%", 100.0 * lo, 100.0 * hi)
     };
-    for ((label, ..), t) in policies.iter().zip(&tallies) {
+    for (Policy { label, .. }, t) in policies.iter().zip(&tallies) {
         println!(
             "{label:<22} {:>7}  {:>13.0}%  {:>11.0}%  {:>9.0}% ({:>2} of {:>2})  {:>12}  {:>14.2} s",
             t.planned,
@@ -271,9 +402,10 @@ fn run(args: &Args) -> Result<(), String> {
         );
     }
     println!("\nheld in physics per category (of trials)");
-    for ((label, ..), t) in policies.iter().zip(&tallies) {
+    for (Policy { label, .. }, t) in policies.iter().zip(&tallies) {
         println!("{label}");
-        for (group, &(held, tried)) in &t.by_group {
+        for (group, g) in &t.by_group {
+            let (held, tried) = (g.held, g.tried);
             println!(
                 "  {group:<14} {:>4.0}% ({held:>2} of {tried:>2})  {:>9}",
                 pct(held, tried),
@@ -281,9 +413,18 @@ fn run(args: &Args) -> Result<(), String> {
             );
         }
     }
+    println!("\nheld in physics by the approach's tilt from straight down (of trials)");
+    for (Policy { label, .. }, t) in policies.iter().zip(&tallies) {
+        let [a, b, c] = t.by_tilt;
+        println!(
+            "{label:<22}  0-15 deg {:>2} of {:>2}   15-45 deg {:>2} of {:>2}   over 45 deg {:>2} of {:>2}",
+            a.0, a.1, b.0, b.1, c.0, c.1
+        );
+    }
+    print_table2(&policies, &tallies);
     if args.top10 {
         println!("\nprecision of the top choices (up to 10 per object, mean over objects)");
-        for ((label, ..), t) in policies.iter().zip(&tallies) {
+        for (Policy { label, .. }, t) in policies.iter().zip(&tallies) {
             let mean = t.top10.iter().sum::<f64>() / t.top10.len().max(1) as f64;
             println!(
                 "{label:<22} {:>5.0}% over {} objects",
@@ -293,4 +434,38 @@ fn run(args: &Args) -> Result<(), String> {
         }
     }
     Ok(())
+}
+
+/// The seed paper's Table 2 for its six categories (its hole punch is the stapler here, the
+/// nearest category): the chosen grasp's predicted quality (mean over objects) and the physics
+/// success, per policy side by side.
+fn print_table2(policies: &[Policy], tallies: &[Tally]) {
+    const SIX: [(&str, &str); 6] = [
+        ("bowl", "bowl"),
+        ("toy chair", "toy_chair"),
+        ("mug", "mug"),
+        ("squash", "squash"),
+        ("hole punch", "stapler"),
+        ("toy car", "toy_car"),
+    ];
+    println!(
+        "\nthe seed's Table 2: predicted quality of the chosen grasp (mean) / held in physics"
+    );
+    print!("{:<12}", "category");
+    for p in policies {
+        print!("  {:>24}", p.label);
+    }
+    println!();
+    for (paper, ours) in SIX {
+        print!("{paper:<12}");
+        for t in tallies {
+            let g = t.by_group.get(ours).copied().unwrap_or_default();
+            let quality = g.quality / g.planned.max(1) as f64;
+            print!(
+                "  {:>24}",
+                format!("{quality:.3} / {} of {}", g.held, g.tried)
+            );
+        }
+        println!();
+    }
 }

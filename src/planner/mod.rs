@@ -6,8 +6,9 @@ pub mod pipeline;
 pub mod sensor;
 
 pub use mvgrasp_planner::{
-    CemParams, DepthImage, GqcnnPolicy, ImageSamplerParams, Mask, Plan, ScoredGrasp, ShippedModel,
-    View, ViewSetting, models, sample_image_grasps, theta_rad,
+    CemParams, DepthImage, Fusion, FusionParams, GqcnnPolicy, ImageSamplerParams, Mask, Occupancy,
+    Plan, ScoredGrasp, ShippedModel, View, ViewSetting, VirtualScorer, VirtualViewParams, models,
+    sample_image_grasps, theta_rad,
 };
 pub use pipeline::{
     AnalyticCheck, PlanParams, PlanReport, PlanTimings, Scene, check_grasp, check_grasps,

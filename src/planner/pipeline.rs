@@ -14,7 +14,7 @@ use serde::Serialize;
 use crate::error::Result;
 use crate::grasp_dataset::GraspDatasetConfig;
 use crate::grasp_dataset::object::render_depths;
-use mvgrasp_planner::{GqcnnPolicy, Rejections, ScoredGrasp, View};
+use mvgrasp_planner::{Fusion, FusionParams, GqcnnPolicy, Rejections, ScoredGrasp, View};
 
 /// The best candidates a report lists (and the hand check makes sure of).
 const TOP_KEPT: usize = 10;
@@ -43,6 +43,11 @@ pub struct PlanParams {
     /// observed, or whose contacts are off the observed surface
     /// ([`mvgrasp_planner::Plan::reject_colliding`]).
     pub hand_check: bool,
+    /// Fuse the views ([`Fusion`]) before the hand check: the open hand must also stay out of
+    /// space that no view has seen, and above the table; and the policy's virtual scorer, if it
+    /// has one, re-scores the best candidates on views drawn from the fused points. `None`:
+    /// each view on its own.
+    pub fusion: Option<FusionParams>,
 }
 
 impl Default for PlanParams {
@@ -58,6 +63,7 @@ impl Default for PlanParams {
             labels,
             physics: true,
             hand_check: true,
+            fusion: None,
         }
     }
 }
@@ -124,7 +130,9 @@ pub struct PlanReport {
 pub struct PlanTimings {
     /// Rendering the views' depth.
     pub render_s: f64,
-    /// Sampling, cropping and scoring in every view.
+    /// Fusing the views (part of `plan_s`).
+    pub fuse_s: f64,
+    /// Fusing, sampling, cropping and scoring in every view, the hand check and re-scoring.
     pub plan_s: f64,
     /// The analytic and physics checks of the best grasp.
     pub check_s: f64,
@@ -247,9 +255,27 @@ pub fn plan_grasp(
     let render_s = started.elapsed().as_secs_f64();
 
     let started = Instant::now();
+    let fusion = params
+        .fusion
+        .as_ref()
+        .and_then(|f| Fusion::build(&scene.views, f));
+    let fuse_s = started.elapsed().as_secs_f64();
     let mut plan = policy.plan(&scene.views, params.seed)?;
+    let scorer = policy.virtual_scorer.as_ref().zip(fusion.as_ref());
     if params.hand_check {
-        plan.reject_colliding(&scene.views, &gripper, TOP_KEPT);
+        match scorer {
+            // Every view's best are re-scored: checked in each view.
+            Some((s, _)) => plan.reject_colliding_each_view(
+                &scene.views,
+                fusion.as_ref(),
+                &gripper,
+                s.params.candidates_per_view.max(TOP_KEPT),
+            ),
+            None => plan.reject_colliding(&scene.views, fusion.as_ref(), &gripper, TOP_KEPT),
+        }
+    }
+    if let Some((scorer, fusion)) = scorer {
+        scorer.rescore(&mut plan, fusion, params.seed)?;
     }
     let plan_s = started.elapsed().as_secs_f64();
 
@@ -288,6 +314,7 @@ pub fn plan_grasp(
         physics: label.and_then(|l| l.physics),
         timings: PlanTimings {
             render_s,
+            fuse_s,
             plan_s,
             check_s,
         },

@@ -187,7 +187,7 @@ fn plan_views(
 ) -> Result<Plan> {
     let mut plan = policy.plan(views, params.seed)?;
     if params.hand_check {
-        plan.reject_colliding(views, gripper, TOP_KEPT);
+        plan.reject_colliding(views, None, gripper, TOP_KEPT);
     }
     Ok(plan)
 }

@@ -1,13 +1,16 @@
 //! The open hand against what the cameras saw: a candidate is rejected when the gripper, open
 //! and coming in straight along its approach from `approach_distance_m` back, would pass
 //! through a point that some view observed (the object or the table), or when its contacts do
-//! not lie on observed surface. Depth alone: no mesh is needed.
+//! not lie on observed surface. Depth alone: no mesh is needed. With the views fused
+//! ([`Fusion`]), the hand must also stay out of space that no view has seen, and above the
+//! table.
 
-use mvgrasp_geometry::Vec3;
+use mvgrasp_geometry::{Pose3, Vec3};
 use mvgrasp_grasp::{Gripper, HandShapes};
 use serde::Serialize;
 
 use crate::depth_image::{MASK_MARGIN_PX, View};
+use crate::fusion::Fusion;
 use crate::policy::ScoredGrasp;
 
 /// The hand's boxes are grown by this before observed points are tested against them, metres:
@@ -23,6 +26,11 @@ const HAND_CLEARANCE_M: f32 = 0.001;
 pub enum Rejection {
     /// The open hand, on its approach or at the grasp, meets an observed point.
     HandMeetsObservedDepth,
+    /// The open hand, on its approach or at the grasp, enters space that no view has seen
+    /// (behind every view's surface: the object's hidden side, the table in its shadow).
+    HandEntersUnknownSpace,
+    /// The open hand reaches below the table.
+    HandBelowTable,
     /// A contact's pixel has no depth in the view the grasp was planned in.
     ContactOffSurface,
     /// A contact's pixel is not on the object's mask (within 2 pixels) in the view the grasp
@@ -35,6 +43,10 @@ pub enum Rejection {
 pub struct Rejections {
     /// See [`Rejection::HandMeetsObservedDepth`].
     pub hand_meets_observed_depth: usize,
+    /// See [`Rejection::HandEntersUnknownSpace`].
+    pub hand_enters_unknown_space: usize,
+    /// See [`Rejection::HandBelowTable`].
+    pub hand_below_table: usize,
     /// See [`Rejection::ContactOffSurface`].
     pub contact_off_surface: usize,
     /// See [`Rejection::ContactOffObject`].
@@ -46,6 +58,8 @@ impl Rejections {
     pub fn add(&mut self, rejection: Rejection) {
         match rejection {
             Rejection::HandMeetsObservedDepth => self.hand_meets_observed_depth += 1,
+            Rejection::HandEntersUnknownSpace => self.hand_enters_unknown_space += 1,
+            Rejection::HandBelowTable => self.hand_below_table += 1,
             Rejection::ContactOffSurface => self.contact_off_surface += 1,
             Rejection::ContactOffObject => self.contact_off_object += 1,
         }
@@ -53,14 +67,23 @@ impl Rejections {
 
     /// All of them.
     pub fn total(&self) -> usize {
-        self.hand_meets_observed_depth + self.contact_off_surface + self.contact_off_object
+        self.hand_meets_observed_depth
+            + self.hand_enters_unknown_space
+            + self.hand_below_table
+            + self.contact_off_surface
+            + self.contact_off_object
     }
 }
 
-/// Checks `candidate` against every view: `None` when it survives, else why not. The hand is
-/// `gripper`'s boxes, open for the candidate's width ([`Gripper::opening_for`]), swept back
-/// along -z by its approach distance.
-pub fn check_hand(candidate: &ScoredGrasp, views: &[View], gripper: &Gripper) -> Option<Rejection> {
+/// Checks `candidate` against every view and, where given, the views fused: `None` when it
+/// survives, else why not. The hand is `gripper`'s boxes, open for the candidate's width
+/// ([`Gripper::opening_for`]), swept back along -z by its approach distance.
+pub fn check_hand(
+    candidate: &ScoredGrasp,
+    views: &[View],
+    fusion: Option<&Fusion>,
+    gripper: &Gripper,
+) -> Option<Rejection> {
     if let Some(view) = views.get(candidate.view) {
         // The contacts' pixels; a grasp at no depth has none on the surface.
         let Some(jaws) = candidate.image.jaws_px(view.depth.intrinsics().fx) else {
@@ -83,20 +106,42 @@ pub fn check_hand(candidate: &ScoredGrasp, views: &[View], gripper: &Gripper) ->
         gripper.opening_for(candidate.grasp.width_m),
         gripper.approach_distance_m,
     );
-    let gripper_from_world = candidate.grasp.world_from_gripper.inverse();
+    let world_from_gripper = candidate.grasp.world_from_gripper;
+    if let Some(fusion) = fusion
+        && hand.lowest_z(&world_from_gripper) < fusion.table_z_m() + HAND_CLEARANCE_M
+    {
+        return Some(Rejection::HandBelowTable);
+    }
+    if meets_any_view(&hand, &world_from_gripper, views) {
+        return Some(Rejection::HandMeetsObservedDepth);
+    }
+    // Observed points were tested exactly above; the cells say what no view has seen.
+    let grown = Vec3::splat(HAND_CLEARANCE_M);
+    fusion
+        .filter(|fusion| !fusion.allows_unknown())
+        .is_some_and(|fusion| {
+            hand.boxes().iter().any(|(cuboid, box_pose)| {
+                let [_, unknown, _] = fusion.count_in_box(
+                    &(world_from_gripper * *box_pose),
+                    cuboid.half_extents + grown,
+                );
+                unknown > 0
+            })
+        })
+        .then_some(Rejection::HandEntersUnknownSpace)
+}
+
+/// Whether an observed point of some view lies in the hand.
+fn meets_any_view(hand: &HandShapes, world_from_gripper: &Pose3, views: &[View]) -> bool {
+    let gripper_from_world = world_from_gripper.inverse();
     views
         .iter()
-        .any(|view| meets_observed_depth(&hand, &gripper_from_world, view))
-        .then_some(Rejection::HandMeetsObservedDepth)
+        .any(|view| meets_observed_depth(hand, &gripper_from_world, view))
 }
 
 /// Whether a point `view` observed lies inside one of the hand's boxes grown by
 /// [`HAND_CLEARANCE_M`].
-fn meets_observed_depth(
-    hand: &HandShapes,
-    gripper_from_world: &mvgrasp_geometry::Pose3,
-    view: &View,
-) -> bool {
+fn meets_observed_depth(hand: &HandShapes, gripper_from_world: &Pose3, view: &View) -> bool {
     let gripper_from_camera = *gripper_from_world * view.camera.world_from_camera;
     let camera_from_gripper = gripper_from_camera.inverse();
     let k = view.depth.intrinsics();
@@ -161,6 +206,7 @@ mod tests {
             grasp: image.to_world(&view.camera),
             theta_rad: view.theta_rad(),
             quality: 0.9,
+            view_quality: None,
         }
     }
 
@@ -172,11 +218,11 @@ mod tests {
         // Across the 4 cm side, 2 cm below the top: the open fingers (8 cm) come down on the
         // table beside the box, clear of it, and stop 3 cm above the table.
         let across = candidate(&view, 0.0, 0.67, 0.04);
-        assert_eq!(check_hand(&across, &views, &panda), None);
+        assert_eq!(check_hand(&across, &views, None, &panda), None);
         // Along the 12 cm side the open fingers land on the box's top.
         let along = candidate(&view, std::f32::consts::FRAC_PI_2, 0.67, 0.12);
         assert_eq!(
-            check_hand(&along, &views, &panda),
+            check_hand(&along, &views, None, &panda),
             Some(Rejection::HandMeetsObservedDepth)
         );
         // Across, the hand opened for a 2 cm grasp (4 cm): the fingers come down brushing the
@@ -184,15 +230,15 @@ mod tests {
         // beside them.
         let grazing = candidate(&view, 0.0, 0.67, 0.02);
         assert_eq!(
-            check_hand(&grazing, &views, &panda),
+            check_hand(&grazing, &views, None, &panda),
             Some(Rejection::HandMeetsObservedDepth)
         );
         let clear = candidate(&view, 0.0, 0.67, 0.025);
-        assert_eq!(check_hand(&clear, &views, &panda), None);
+        assert_eq!(check_hand(&clear, &views, None, &panda), None);
         // Across, but so deep that the fingertips go through the table.
         let deep = candidate(&view, 0.0, 0.73, 0.04);
         assert_eq!(
-            check_hand(&deep, &views, &panda),
+            check_hand(&deep, &views, None, &panda),
             Some(Rejection::HandMeetsObservedDepth)
         );
     }
@@ -215,7 +261,7 @@ mod tests {
             .with_mask(Mask::new(k.width, k.height, half).unwrap())
             .unwrap();
         assert_eq!(
-            check_hand(&across, &[masked], &Gripper::default()),
+            check_hand(&across, &[masked], None, &Gripper::default()),
             Some(Rejection::ContactOffObject)
         );
         // The whole box: both on it.
@@ -226,7 +272,64 @@ mod tests {
             .clone()
             .with_mask(Mask::new(k.width, k.height, whole).unwrap())
             .unwrap();
-        assert_eq!(check_hand(&across, &[masked], &Gripper::default()), None);
+        assert_eq!(
+            check_hand(&across, &[masked], None, &Gripper::default()),
+            None
+        );
+    }
+
+    #[test]
+    fn with_the_views_fused_the_hand_must_stay_out_of_unseen_space() {
+        use crate::fusion::FusionParams;
+        use crate::test_scenes::seen_box;
+        use mvgrasp_geometry::{Pose3, Rot3};
+        // Straight down across the 4 cm cube, 2.5 cm below its top, the hand open 6 cm: the +x
+        // finger comes down beside the cube, into the shadow of a camera on -x.
+        let image = ImageGrasp {
+            center_px: [0.0, 0.0],
+            angle_rad: 0.0,
+            depth_m: 0.0,
+            width_m: 0.04,
+        };
+        let down = Pose3::from_parts(
+            Vec3::new(0.0, 0.0, 0.015),
+            Rot3::from_rotation_x(std::f32::consts::PI),
+        );
+        // Planned in no view: the contacts' pixels are not tested.
+        let grasp = |world_from_gripper| ScoredGrasp {
+            view: usize::MAX,
+            image,
+            grasp: mvgrasp_grasp::Grasp {
+                world_from_gripper,
+                width_m: 0.04,
+            },
+            theta_rad: 0.0,
+            quality: 0.9,
+            view_quality: None,
+        };
+        let across = grasp(down);
+        let panda = Gripper::default();
+        let params = FusionParams::default();
+        let left = [seen_box(-1.0)];
+        let fused = Fusion::build(&left, &params).unwrap();
+        assert_eq!(check_hand(&across, &left, None, &panda), None);
+        assert_eq!(
+            check_hand(&across, &left, Some(&fused), &panda),
+            Some(Rejection::HandEntersUnknownSpace)
+        );
+        // Seen from +x as well, the shadow is free space.
+        let both = [seen_box(-1.0), seen_box(1.0)];
+        let fused = Fusion::build(&both, &params).unwrap();
+        assert_eq!(check_hand(&across, &both, Some(&fused), &panda), None);
+        // 2 cm lower, the fingertips reach below the table.
+        let low = grasp(Pose3::from_parts(
+            Vec3::new(0.0, 0.0, -0.005),
+            down.rotation,
+        ));
+        assert_eq!(
+            check_hand(&low, &both, Some(&fused), &panda),
+            Some(Rejection::HandBelowTable)
+        );
     }
 
     #[test]
@@ -235,7 +338,7 @@ mod tests {
         // The jaws 6 cm apart: the contact pixels fall in the unobserved ring around the box.
         let off = candidate(&view, 0.0, 0.67, 0.06);
         assert_eq!(
-            check_hand(&off, &[view], &Gripper::default()),
+            check_hand(&off, &[view], None, &Gripper::default()),
             Some(Rejection::ContactOffSurface)
         );
     }

@@ -5,6 +5,7 @@ pub mod contract;
 pub mod crop;
 pub mod depth_image;
 pub mod error;
+pub mod fusion;
 pub mod hand_check;
 pub mod models;
 pub mod policy;
@@ -13,14 +14,17 @@ pub mod seed;
 pub mod table;
 #[cfg(test)]
 mod test_scenes;
+pub mod virtual_view;
 
 pub use cem::CemParams;
 pub use contract::InputContract;
 pub use crop::{CropParams, crop_depth};
 pub use depth_image::{DepthImage, Mask, View, theta_rad};
 pub use error::{PlannerError, Result};
+pub use fusion::{Fusion, FusionParams, Occupancy};
 pub use hand_check::{Rejection, Rejections, check_hand};
 pub use models::{ShippedModel, ViewSetting};
 pub use policy::{GqcnnPolicy, Plan, ScoredGrasp};
 pub use sampler::{ImageSamplerParams, sample_image_grasps};
 pub use table::{TableFit, TableFitParams, fit_table, objects_above};
+pub use virtual_view::{VirtualScorer, VirtualViewParams, virtual_crop};

@@ -12,9 +12,11 @@ use crate::contract::InputContract;
 use crate::crop::crop_depth;
 use crate::depth_image::View;
 use crate::error::{PlannerError, Result};
+use crate::fusion::Fusion;
 use crate::hand_check::{Rejections, check_hand};
 use crate::sampler::{ImageSamplerParams, sample_image_grasps};
 use crate::seed::splitmix;
+use crate::virtual_view::VirtualScorer;
 
 /// Salts the cross-entropy method's seed apart from the sampler's.
 const CEM_SALT: u64 = 0xce3_5eed;
@@ -30,8 +32,13 @@ pub struct ScoredGrasp {
     pub grasp: Grasp,
     /// The view's angle to the table plane (the multi-view GQ-CNN's theta), radians.
     pub theta_rad: f32,
-    /// The network's probability that the grasp is robust.
+    /// The network's probability that the grasp is robust: the planning network's on the view,
+    /// or, where the candidate was re-scored ([`crate::VirtualScorer`]), the re-scoring
+    /// network's on its virtual view. Candidates are ranked by it.
     pub quality: f32,
+    /// The planning network's score on the view, where `quality` is a re-score.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub view_quality: Option<f32>,
 }
 
 /// What the planner found in each view and overall.
@@ -47,22 +54,57 @@ pub struct Plan {
 }
 
 impl Plan {
-    /// Checks the candidates best first against every view ([`check_hand`]: the open hand on
-    /// its approach and at the grasp must meet no observed point, the contacts must lie on
-    /// observed surface), dropping those that fail, until `keep` have survived; the rest stay
-    /// in order, unchecked. The rejections are counted in [`Plan::rejections`].
-    pub fn reject_colliding(&mut self, views: &[View], gripper: &Gripper, keep: usize) {
+    /// Checks the candidates best first against every view and, where given, the views fused
+    /// ([`check_hand`]: the open hand on its approach and at the grasp must meet no observed
+    /// point, nor space no view has seen, the contacts must lie on observed surface), dropping
+    /// those that fail, until `keep` have survived; the rest stay in order, unchecked. The
+    /// rejections are counted in [`Plan::rejections`].
+    pub fn reject_colliding(
+        &mut self,
+        views: &[View],
+        fusion: Option<&Fusion>,
+        gripper: &Gripper,
+        keep: usize,
+    ) {
+        self.reject_until(views, fusion, gripper, keep, false);
+    }
+
+    /// [`Plan::reject_colliding`] until `keep` of each view have survived.
+    pub fn reject_colliding_each_view(
+        &mut self,
+        views: &[View],
+        fusion: Option<&Fusion>,
+        gripper: &Gripper,
+        keep: usize,
+    ) {
+        self.reject_until(views, fusion, gripper, keep, true);
+    }
+
+    fn reject_until(
+        &mut self,
+        views: &[View],
+        fusion: Option<&Fusion>,
+        gripper: &Gripper,
+        keep: usize,
+        each_view: bool,
+    ) {
         let mut kept = Vec::with_capacity(self.candidates.len());
-        let mut survivors = 0;
+        // Survivors overall, or per view.
+        let mut survivors = vec![0usize; if each_view { views.len().max(1) } else { 1 }];
         for candidate in std::mem::take(&mut self.candidates) {
-            if survivors >= keep {
+            let slot = if each_view {
+                candidate.view.min(survivors.len() - 1)
+            } else {
+                0
+            };
+            if survivors[slot] >= keep {
                 kept.push(candidate);
                 continue;
             }
-            match check_hand(&candidate, views, gripper) {
+            match check_hand(&candidate, views, fusion, gripper) {
                 Some(rejection) => self.rejections.add(rejection),
                 None => {
-                    survivors += 1;
+                    survivors[slot] += 1;
                     kept.push(candidate);
                 }
             }
@@ -96,6 +138,9 @@ pub struct GqcnnPolicy {
     /// Refine each view's candidates by Dex-Net 2.0's cross-entropy method; `None`: score the
     /// sampler's candidates only.
     pub cem: Option<CemParams>,
+    /// Re-score the best candidates on virtual views of the fused scene (where the views are
+    /// fused); `None`: rank by this network's score on each view.
+    pub virtual_scorer: Option<VirtualScorer>,
 }
 
 impl GqcnnPolicy {
@@ -124,6 +169,7 @@ impl GqcnnPolicy {
             max_width_m,
             batch: 256,
             cem: None,
+            virtual_scorer: None,
         })
     }
 
@@ -185,6 +231,7 @@ impl GqcnnPolicy {
                 grasp: g.to_world(&view.camera),
                 theta_rad: theta,
                 quality: q,
+                view_quality: None,
             })
             .collect())
     }

@@ -46,3 +46,39 @@ pub(crate) fn box_view(hole: bool) -> View {
     .unwrap();
     View::new(0, camera, depth).unwrap()
 }
+
+/// A 4 cm cube on the table at the origin, seen by a PhoXi S 0.6 m away at 45 degrees above
+/// the table from the side of `side` (-1: from -x, 1: from +x), exact per-pixel depth (ray
+/// casts against the cube and the table).
+pub(crate) fn seen_box(side: f32) -> View {
+    let k = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
+    let target = Vec3::new(0.0, 0.0, 0.02);
+    let r = 0.6 * std::f32::consts::FRAC_1_SQRT_2;
+    let camera = Camera::look_at(
+        k,
+        target + Vec3::new(side * r, 0.0, r),
+        target,
+        Vec3::new(0.0, 0.0, 1.0),
+    )
+    .unwrap();
+    let (lo, hi) = (Vec3::new(-0.02, -0.02, 0.0), Vec3::new(0.02, 0.02, 0.04));
+    let origin = camera.position();
+    let rotation = camera.world_from_camera.rotation;
+    let mut depth = Vec::with_capacity((k.width * k.height) as usize);
+    for v in 0..k.height {
+        for u in 0..k.width {
+            // Along this direction the parameter is the depth (camera z).
+            let dir = rotation * Vec3::new((u as f32 - k.cx) / k.fx, (v as f32 - k.cy) / k.fy, 1.0);
+            // The cube: slabs.
+            let (mut t0, mut t1) = (0.0f32, f32::INFINITY);
+            for a in 0..3 {
+                let (ta, tb) = ((lo[a] - origin[a]) / dir[a], (hi[a] - origin[a]) / dir[a]);
+                t0 = t0.max(ta.min(tb));
+                t1 = t1.min(ta.max(tb));
+            }
+            let table = if dir.z < 0.0 { -origin.z / dir.z } else { 0.0 };
+            depth.push(if t0 <= t1 { t0 } else { table });
+        }
+    }
+    View::new(0, camera, DepthImage::new(k, depth).unwrap()).unwrap()
+}
