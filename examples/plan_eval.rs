@@ -103,8 +103,11 @@ struct Args {
     #[arg(long, default_value_t = 10)]
     rescore_candidates: usize,
     /// Perturbed copies averaged into each re-score (0: the candidate alone).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 8)]
     perturbations: usize,
+    /// The re-scoring network proposes no candidates of its own in the top-down view.
+    #[arg(long)]
+    no_top_down_proposals: bool,
     /// The fused policies' hand check lets the hand into space no view has seen.
     #[arg(long)]
     allow_unknown: bool,
@@ -282,10 +285,12 @@ fn run(args: &Args) -> Result<(), String> {
         if p.fused
             && let Some(model) = rescorer
         {
-            let mut scorer = VirtualScorer::new(load(model)?);
+            let mut scorer = VirtualScorer::new(load(model)?, gripper.max_opening_m)
+                .map_err(|e| e.to_string())?;
             scorer.params.candidates_per_view = args.rescore_candidates;
             scorer.params.perturbations = args.perturbations;
-            policy.virtual_scorer = Some(scorer);
+            scorer.params.propose_top_down = !args.no_top_down_proposals;
+            policy.virtual_scorer = Some(Box::new(scorer));
         }
         prepared.push((params, gripper, policy));
     }

@@ -24,9 +24,9 @@ use mvgrasp::grasps_file::{GraspsFile, WorldFrame, write_overlay};
 use mvgrasp::infer::Gqcnn;
 use mvgrasp::mcap_log::write_plan_log;
 use mvgrasp::planner::{
-    CemParams, GqcnnPolicy, ObjectSource, PlanParams, PlanReport, ScoredGrasp, SensorFiles,
-    SensorPlanParams, SensorPlanReport, View, ViewSetting, models, plan_grasp,
-    plan_on_sensor_depth, plan_on_views_dir,
+    CemParams, FusionParams, GqcnnPolicy, ObjectSource, PlanParams, PlanReport, ScoredGrasp,
+    SensorFiles, SensorPlanParams, SensorPlanReport, View, ViewSetting, VirtualScorer, models,
+    plan_grasp, plan_on_sensor_depth, plan_on_views_dir,
 };
 use mvgrasp::render::{Backend, Renderer};
 use mvgrasp::{ObjectReport, ReportParams};
@@ -42,9 +42,17 @@ struct Args {
     #[arg(long, default_value = "phoxi_s")]
     camera: String,
     /// The network: a shipped one (gqcnn_small_topdown, gqcnn_small_multiview) or an export's
-    /// JSON (training/: NAME.json beside NAME.safetensors).
-    #[arg(long, default_value = "gqcnn_small_topdown")]
-    model: String,
+    /// JSON (training/: NAME.json beside NAME.safetensors). Default: gqcnn_small_topdown; with
+    /// --fuse, gqcnn_small_multiview (it proposes the candidates of every view).
+    #[arg(long)]
+    model: Option<String>,
+    /// The multi-view planner: the views (5 unless --views says otherwise, the first
+    /// top-down, 0.65 m away) fused into one model of the scene; every candidate's open hand
+    /// checked against it (nothing observed, no unseen space, above the table); the best 10 of
+    /// each view re-scored by the top-down GQ-CNN on virtual views along their approaches (the
+    /// mean over 8 perturbed copies).
+    #[arg(long, conflicts_with_all = ["depth"])]
+    fuse: bool,
     /// Plan in the first N of the 10 test views (1: the top-down view alone). Default: 1 for a
     /// GQ-CNN, 10 for a multi-view GQ-CNN.
     #[arg(long)]
@@ -105,6 +113,20 @@ struct Args {
     mask: Option<PathBuf>,
 }
 
+/// Views the multi-view planner fuses unless told otherwise (the seed paper's setting).
+const FUSED_VIEWS: usize = 5;
+
+/// The network `--model` names, or the default for the planner.
+fn model_of(args: &Args) -> String {
+    args.model.clone().unwrap_or_else(|| {
+        if args.fuse {
+            models::MVGQCNN.name.to_string()
+        } else {
+            models::GQCNN_TOPDOWN.name.to_string()
+        }
+    })
+}
+
 /// No grasp survived: a result, not an error (exit code 3, the outputs still written).
 const NO_GRASP: u8 = 3;
 
@@ -150,8 +172,14 @@ fn run(args: &Args) -> Result<bool, String> {
         },
     )
     .map_err(|e| e.to_string())?;
-    let (model_name, net) = load_model(&args.model)?;
-    let setting = ViewSetting::for_pose_inputs(net.architecture().pose_inputs);
+    let (model_name, net) = load_model(&model_of(args))?;
+    let mut setting = ViewSetting::for_pose_inputs(net.architecture().pose_inputs);
+    if args.fuse {
+        setting = ViewSetting {
+            views: FUSED_VIEWS,
+            ..setting
+        };
+    }
     let layout = PlanParams::default().views;
     if args.views.is_some_and(|v| v > layout.count) {
         return Err(format!(
@@ -172,6 +200,15 @@ fn run(args: &Args) -> Result<bool, String> {
     let gripper = params.labels.gripper().map_err(|e| e.to_string())?;
     let mut policy = GqcnnPolicy::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
     policy.cem = args.cem.then(CemParams::default);
+    if args.fuse {
+        // The views spread over the whole cap (the first top-down), not the first of ten.
+        params.views.count = params.max_views;
+        params.fusion = Some(FusionParams::default());
+        let scorer = models::GQCNN_TOPDOWN.load().map_err(|e| e.to_string())?;
+        let scorer =
+            VirtualScorer::new(scorer, gripper.max_opening_m).map_err(|e| e.to_string())?;
+        policy.virtual_scorer = Some(Box::new(scorer));
+    }
     let backend = Backend::parse(&args.backend).ok_or_else(|| {
         format!(
             "--backend: unknown backend {:?} (expected auto, vulkan, gl, metal, dx12)",
@@ -192,7 +229,13 @@ fn run(args: &Args) -> Result<bool, String> {
         print!("{}", description.summary());
         print!(
             "{}",
-            summary(&model_name, policy.net(), &plan, params.views.radius_m)
+            summary(
+                &model_name,
+                policy.net(),
+                &plan,
+                params.views.radius_m,
+                args.fuse
+            )
         );
     }
     if let Some(out) = &args.out {
@@ -244,7 +287,7 @@ fn sensor_setup(
     ),
     String,
 > {
-    let (model_name, net) = load_model(&args.model)?;
+    let (model_name, net) = load_model(&model_of(args))?;
     let gripper = PlanParams::default()
         .labels
         .gripper()
@@ -360,11 +403,9 @@ fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
             None => {
                 let _ = writeln!(
                     s,
-                    "no grasp: {} candidates rejected (the open hand meets observed depth {}, contacts off the observed surface {}, off the object {})",
+                    "no grasp: {} candidates rejected: {}",
                     report.rejections.total(),
-                    report.rejections.hand_meets_observed_depth,
-                    report.rejections.contact_off_surface,
-                    report.rejections.contact_off_object
+                    report.rejections.describe()
                 );
             }
         }
@@ -420,11 +461,7 @@ fn sensor_summary(model: &str, files: &SensorFiles, r: &SensorPlanReport) -> Str
     );
     let _ = writeln!(s, "plan: {model}, {} candidates", r.candidates);
     let rej = &r.rejections;
-    let reasons = format!(
-        "the open hand meets observed depth ({}), contacts off the observed surface ({}), \
-         contacts off the object ({})",
-        rej.hand_meets_observed_depth, rej.contact_off_surface, rej.contact_off_object
-    );
+    let reasons = rej.describe();
     let Some(best) = &r.best else {
         if rej.total() > 0 {
             let _ = writeln!(s, "no grasp: every candidate was rejected: {reasons}");
@@ -501,13 +538,22 @@ fn load_model(model: &str) -> Result<(String, Gqcnn), String> {
     ))
 }
 
-fn summary(model: &str, net: &Gqcnn, plan: &PlanReport, distance_m: f32) -> String {
+fn summary(model: &str, net: &Gqcnn, plan: &PlanReport, distance_m: f32, fused: bool) -> String {
     use std::fmt::Write;
     let mut s = String::new();
-    let kind = if net.architecture().pose_inputs == 2 {
-        "multi-view GQ-CNN"
-    } else {
-        "GQ-CNN"
+    let kind = match (net.architecture().pose_inputs == 2, fused) {
+        (_, true) => format!(
+            "the multi-view planner: the views fused, candidates from {}, the best of each view \
+             re-scored by {} on virtual views",
+            if net.architecture().pose_inputs == 2 {
+                "the multi-view GQ-CNN"
+            } else {
+                "the GQ-CNN"
+            },
+            models::GQCNN_TOPDOWN.name
+        ),
+        (true, false) => "multi-view GQ-CNN, each view on its own".into(),
+        (false, false) => "GQ-CNN".into(),
     };
     let _ = writeln!(
         s,
@@ -529,11 +575,7 @@ fn summary(model: &str, net: &Gqcnn, plan: &PlanReport, distance_m: f32) -> Stri
     let r = &plan.rejections;
     let Some(best) = &plan.best else {
         let why = if r.total() > 0 {
-            format!(
-                "every candidate was rejected: the open hand meets observed depth ({}), contacts \
-                 off the observed surface ({})",
-                r.hand_meets_observed_depth, r.contact_off_surface
-            )
+            format!("every candidate was rejected: {}", r.describe())
         } else {
             "no view had an antipodal candidate the gripper fits".to_string()
         };
@@ -543,11 +585,9 @@ fn summary(model: &str, net: &Gqcnn, plan: &PlanReport, distance_m: f32) -> Stri
     if r.total() > 0 {
         let _ = writeln!(
             s,
-            "rejected {} candidates before the best: the open hand meets observed depth ({}), \
-             contacts off the observed surface ({})",
+            "rejected {} candidates before the best: {}",
             r.total(),
-            r.hand_meets_observed_depth,
-            r.contact_off_surface
+            r.describe()
         );
     }
     let p = best.grasp.center();

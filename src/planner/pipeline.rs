@@ -261,7 +261,10 @@ pub fn plan_grasp(
         .and_then(|f| Fusion::build(&scene.views, f));
     let fuse_s = started.elapsed().as_secs_f64();
     let mut plan = policy.plan(&scene.views, params.seed)?;
-    let scorer = policy.virtual_scorer.as_ref().zip(fusion.as_ref());
+    let scorer = policy.virtual_scorer.as_deref().zip(fusion.as_ref());
+    if let Some((scorer, _)) = scorer {
+        plan.merge(scorer.propose(&scene.views, params.seed)?);
+    }
     if params.hand_check {
         match scorer {
             // Every view's best are re-scored: checked in each view.

@@ -45,6 +45,9 @@ pub struct FusionParams {
     /// The points kept for virtual views cover the object grown by this, metres (a GQ-CNN's
     /// crop spans 6 cm each side of a grasp at 0.7 m).
     pub points_margin_m: f32,
+    /// The points kept for virtual views are thinned to one (their mean) per cube of this
+    /// edge, metres (a crop pixel spans 3.8 mm at 0.7 m).
+    pub point_cell_m: f32,
     /// Observed points this far above the table are the object (within its mask where the
     /// view has one), metres.
     pub min_height_m: f32,
@@ -66,6 +69,7 @@ impl Default for FusionParams {
             voxel_m: 0.003,
             margin_m: 0.05,
             points_margin_m: 0.08,
+            point_cell_m: 0.0015,
             min_height_m: 0.005,
             table_z_m: 0.0,
             // A cell's half diagonal: a surface that crosses the cell lies within it of the
@@ -174,21 +178,35 @@ impl Fusion {
                     }
                 }
             });
-        // Observed points mark their cells; those near the object are kept.
+        // Observed points mark their cells; those near the object are kept, one mean point per
+        // `point_cell_m` cube (views overlap: the same surface seen five times is drawn once).
         let (keep_lo, keep_hi) = (
             lo - Vec3::splat(params.points_margin_m),
             hi + Vec3::splat(params.points_margin_m),
         );
+        let point_cell = params.point_cell_m.max(1e-4);
+        let key_dims = ((keep_hi - keep_lo) / point_cell).ceil() + Vec3::ONE;
+        let mut slot_of = std::collections::HashMap::<u64, usize>::new();
+        let mut sums: Vec<(Vec3, u32)> = Vec::new();
         for (points, _) in per_view {
             for p in points {
                 if let Some(i) = fusion.index_of(p) {
                     fusion.cells[i] = Occupancy::Occupied;
                 }
                 if p.cmpge(keep_lo).all() && p.cmple(keep_hi).all() {
-                    fusion.points.push(p);
+                    let c = ((p - keep_lo) / point_cell).floor();
+                    let key = ((c.z as u64 * key_dims.y as u64) + c.y as u64) * key_dims.x as u64
+                        + c.x as u64;
+                    let slot = *slot_of.entry(key).or_insert_with(|| {
+                        sums.push((Vec3::ZERO, 0));
+                        sums.len() - 1
+                    });
+                    sums[slot].0 += p;
+                    sums[slot].1 += 1;
                 }
             }
         }
+        fusion.points = sums.into_iter().map(|(s, n)| s / n as f32).collect();
         for cell in &fusion.cells {
             fusion.counts[*cell as usize] += 1;
         }

@@ -65,6 +65,35 @@ impl Rejections {
         }
     }
 
+    /// The reasons, in words with their counts ("none" when there is none).
+    pub fn describe(&self) -> String {
+        let reasons: Vec<String> = [
+            (
+                "the open hand meets observed depth",
+                self.hand_meets_observed_depth,
+            ),
+            (
+                "it enters space no view has seen",
+                self.hand_enters_unknown_space,
+            ),
+            ("it reaches below the table", self.hand_below_table),
+            (
+                "contacts off the observed surface",
+                self.contact_off_surface,
+            ),
+            ("contacts off the object", self.contact_off_object),
+        ]
+        .into_iter()
+        .filter(|&(_, n)| n > 0)
+        .map(|(why, n)| format!("{why} ({n})"))
+        .collect();
+        if reasons.is_empty() {
+            "none".into()
+        } else {
+            reasons.join(", ")
+        }
+    }
+
     /// All of them.
     pub fn total(&self) -> usize {
         self.hand_meets_observed_depth

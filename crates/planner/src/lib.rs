@@ -27,4 +27,4 @@ pub use models::{ShippedModel, ViewSetting};
 pub use policy::{GqcnnPolicy, Plan, ScoredGrasp};
 pub use sampler::{ImageSamplerParams, sample_image_grasps};
 pub use table::{TableFit, TableFitParams, fit_table, objects_above};
-pub use virtual_view::{VirtualScorer, VirtualViewParams, virtual_crop};
+pub use virtual_view::{VirtualScorer, VirtualViewParams, tilt_rad, virtual_crop};

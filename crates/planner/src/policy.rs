@@ -112,6 +112,19 @@ impl Plan {
         self.candidates = kept;
     }
 
+    /// Adds `extra` candidates (another network's, say) and ranks all of them again, best
+    /// first (ties: the earlier first).
+    pub fn merge(&mut self, extra: Vec<ScoredGrasp>) {
+        for c in &extra {
+            if let Some(n) = self.candidates_per_view.get_mut(c.view) {
+                *n += 1;
+            }
+        }
+        self.candidates.extend(extra);
+        self.candidates
+            .sort_by(|a, b| b.quality.total_cmp(&a.quality));
+    }
+
     /// The best grasp, if any view had a candidate.
     pub fn best(&self) -> Option<&ScoredGrasp> {
         self.candidates.first()
@@ -140,7 +153,7 @@ pub struct GqcnnPolicy {
     pub cem: Option<CemParams>,
     /// Re-score the best candidates on virtual views of the fused scene (where the views are
     /// fused); `None`: rank by this network's score on each view.
-    pub virtual_scorer: Option<VirtualScorer>,
+    pub virtual_scorer: Option<Box<VirtualScorer>>,
 }
 
 impl GqcnnPolicy {

@@ -17,11 +17,15 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::contract::InputContract;
 use crate::crop::CropParams;
+use crate::depth_image::View;
 use crate::error::Result;
 use crate::fusion::Fusion;
-use crate::policy::{Plan, ScoredGrasp};
+use crate::policy::{GqcnnPolicy, Plan, ScoredGrasp};
+use crate::seed::splitmix;
+
+/// Salts the scorer's own proposals' seed apart from the planner's.
+const PROPOSE_SALT: u64 = 0x70d0_5eed;
 
 /// How candidates are re-scored on virtual views.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -43,6 +47,17 @@ pub struct VirtualViewParams {
     pub perturb_translation_m: f32,
     /// ... and its orientation up to this about each axis, radians.
     pub perturb_rotation_rad: f32,
+    /// The scorer also proposes candidates of its own in the views that look within
+    /// `top_down_tolerance_rad` of straight down (a top-down GQ-CNN plans there as it was
+    /// trained); they are checked and re-scored like the others.
+    pub propose_top_down: bool,
+    /// See `propose_top_down`, radians.
+    pub top_down_tolerance_rad: f32,
+}
+
+/// The angle between `grasp`'s approach and straight down, radians.
+pub fn tilt_rad(grasp: &Grasp) -> f32 {
+    (-grasp.approach().z).clamp(-1.0, 1.0).acos()
 }
 
 impl Default for VirtualViewParams {
@@ -52,9 +67,11 @@ impl Default for VirtualViewParams {
             min_distance_m: 0.4,
             front_tolerance_m: 0.003,
             candidates_per_view: 10,
-            perturbations: 0,
+            perturbations: 8,
             perturb_translation_m: 0.002,
             perturb_rotation_rad: 5f32.to_radians(),
+            propose_top_down: true,
+            top_down_tolerance_rad: 10f32.to_radians(),
         }
     }
 }
@@ -171,21 +188,52 @@ pub fn virtual_crop(
 /// A network that re-scores candidates on virtual views of the fused scene.
 #[derive(Debug)]
 pub struct VirtualScorer {
-    net: Gqcnn,
-    /// What the network expects.
-    pub contract: InputContract,
+    /// The network, with its sampler and contract, for the candidates it proposes itself.
+    pub policy: GqcnnPolicy,
     /// The views, the candidates re-scored and the perturbations.
     pub params: VirtualViewParams,
 }
 
 impl VirtualScorer {
-    /// A scorer with `net` and the default parameters.
-    pub fn new(net: Gqcnn) -> Self {
-        Self {
-            contract: InputContract::of(&net),
-            net,
+    /// A scorer with `net` and the default parameters, for a gripper opening `max_width_m`.
+    ///
+    /// # Errors
+    /// See [`GqcnnPolicy::new`].
+    pub fn new(net: Gqcnn, max_width_m: f32) -> Result<Self> {
+        Ok(Self {
+            policy: GqcnnPolicy::new(net, max_width_m)?,
             params: VirtualViewParams::default(),
+        })
+    }
+
+    /// The candidates the scorer's network finds itself in the views that look (nearly)
+    /// straight down ([`VirtualViewParams::propose_top_down`]), scored on those views, with
+    /// their indices in `views`; none when not asked for.
+    ///
+    /// # Errors
+    /// See [`GqcnnPolicy::plan`].
+    pub fn propose(&self, views: &[View], seed: u64) -> Result<Vec<ScoredGrasp>> {
+        if !self.params.propose_top_down {
+            return Ok(Vec::new());
         }
+        let (indices, top): (Vec<usize>, Vec<View>) = views
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| {
+                (-v.camera.optical_axis().z).clamp(-1.0, 1.0).acos()
+                    <= self.params.top_down_tolerance_rad
+            })
+            .map(|(i, v)| (i, v.clone()))
+            .unzip();
+        let plan = self.policy.plan(&top, splitmix(seed ^ PROPOSE_SALT))?;
+        Ok(plan
+            .candidates
+            .into_iter()
+            .map(|c| ScoredGrasp {
+                view: indices[c.view],
+                ..c
+            })
+            .collect())
     }
 
     /// The network's probability that each grasp is robust, seen on its virtual view of
@@ -221,9 +269,10 @@ impl VirtualScorer {
                 });
             }
         }
-        let crop = self.contract.crop;
+        let contract = self.policy.contract;
+        let crop = contract.crop;
         let side = crop.size_px as usize;
-        let pose_inputs = self.net.architecture().pose_inputs;
+        let pose_inputs = self.policy.net().architecture().pose_inputs;
         let mut workspace = GqcnnWorkspace::default();
         let mut quality = Vec::with_capacity(posed.len());
         for chunk in posed.chunks(256) {
@@ -233,14 +282,7 @@ impl VirtualScorer {
                 .collect();
             let mut crops = Vec::with_capacity(chunk.len() * side * side);
             crops.par_extend(chunk.par_iter().zip(&distances).flat_map_iter(|(g, &d)| {
-                virtual_crop(
-                    fusion,
-                    g,
-                    &crop,
-                    self.contract.focal_px,
-                    d,
-                    p.front_tolerance_m,
-                )
+                virtual_crop(fusion, g, &crop, contract.focal_px, d, p.front_tolerance_m)
             }));
             let mut poses = Vec::with_capacity(chunk.len() * pose_inputs);
             for (g, &d) in chunk.iter().zip(&distances) {
@@ -252,7 +294,7 @@ impl VirtualScorer {
             }
             let depth = Tensor::new(&[chunk.len(), 1, side, side], crops)?;
             let pose = Tensor::new(&[chunk.len(), pose_inputs], poses)?;
-            quality.extend(self.net.predict(&depth, &pose, &mut workspace)?);
+            quality.extend(self.policy.net().predict(&depth, &pose, &mut workspace)?);
         }
         Ok(quality
             .chunks(copies)
