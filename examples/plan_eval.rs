@@ -105,6 +105,10 @@ struct Args {
     /// Perturbed copies averaged into each re-score (0: the candidate alone).
     #[arg(long, default_value_t = 8)]
     perturbations: usize,
+    /// Candidate grasp axes the multi-view GQ-CNN samples per view in the fused policies (each
+    /// at 3 depths; `plan`'s sampler default: 200).
+    #[arg(long)]
+    fused_grasps: Option<usize>,
     /// The re-scoring network proposes no candidates of its own in the top-down view.
     #[arg(long)]
     no_top_down_proposals: bool,
@@ -290,6 +294,9 @@ fn run(args: &Args) -> Result<(), String> {
             scorer.params.candidates_per_view = args.rescore_candidates;
             scorer.params.perturbations = args.perturbations;
             scorer.params.propose_top_down = !args.no_top_down_proposals;
+            if let Some(n) = args.fused_grasps {
+                policy.sampler.num_grasps = n;
+            }
             policy.virtual_scorer = Some(Box::new(scorer));
         }
         prepared.push((params, gripper, policy));

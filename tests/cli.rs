@@ -84,6 +84,53 @@ fn plan_json_is_complete_and_deterministic() {
     assert!(sum > 0.9 && sum <= 1.0001, "{sum}");
 }
 
+#[test]
+fn plan_fuse_fuses_five_views_rescores_and_is_deterministic() {
+    let args = ["--json", "--fuse", "--category", "can", "--index", "1"];
+    let a = plan(&args);
+    let b = plan(&args);
+    assert!(a.status.success(), "{}", String::from_utf8_lossy(&a.stderr));
+    assert_eq!(a.stdout, b.stdout, "the same seed gives the same bytes");
+    let report: serde_json::Value = serde_json::from_slice(&a.stdout).unwrap();
+    // The multi-view GQ-CNN proposes in 5 views, the first straight down.
+    assert_eq!(report["model"], "gqcnn_small_multiview");
+    let plan = &report["plan"];
+    assert_eq!(plan["views"].as_array().unwrap().len(), 5);
+    assert!((plan["views"][0]["elevation_deg"].as_f64().unwrap() - 90.0).abs() < 1e-3);
+    // The best ten were re-scored on virtual views: each keeps the score it was planned with.
+    let top = plan["top"].as_array().unwrap();
+    assert_eq!(top.len(), 10);
+    for g in top {
+        assert!(g["view_quality"].as_f64().is_some(), "{g}");
+    }
+    let scores: Vec<f64> = top.iter().map(|g| g["quality"].as_f64().unwrap()).collect();
+    assert!(scores.windows(2).all(|w| w[0] >= w[1]), "{scores:?}");
+    // The summary says which planner ran.
+    let text = plan_text(&[
+        "--fuse",
+        "--category",
+        "can",
+        "--index",
+        "1",
+        "--no-physics",
+    ]);
+    assert!(
+        text.contains("the multi-view planner: the views fused"),
+        "{text}"
+    );
+    assert!(text.contains("5 view(s) 0.65 m away"), "{text}");
+}
+
+fn plan_text(args: &[&str]) -> String {
+    let out = plan(args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
 /// A 17 x 13 cm box lying flat, 3.8 cm tall: too wide for the Panda from above, too low to take
 /// from the side without a finger in the table. The planner returns no grasp and says why.
 #[test]

@@ -263,17 +263,7 @@ impl Fusion {
     pub fn count_in_box(&self, world_from_box: &Pose3, half: Vec3) -> [usize; 3] {
         let mut counts = [0; 3];
         // The box's cells: its world bounds, clipped to the grid.
-        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-        for corner in 0..8 {
-            let sign = |bit: u32| if corner >> bit & 1 == 1 { 1.0 } else { -1.0 };
-            let p = world_from_box.transform_point(Vec3::new(
-                sign(0) * half.x,
-                sign(1) * half.y,
-                sign(2) * half.z,
-            ));
-            lo = lo.min(p);
-            hi = hi.max(p);
-        }
+        let (lo, hi) = world_bounds(world_from_box, half);
         let range = |axis: usize, lo: f32, hi: f32| {
             let o = self.origin[axis];
             let a = ((lo - o) / self.voxel_m).ceil().max(0.0);
@@ -305,6 +295,28 @@ impl Fusion {
         counts
     }
 
+    /// Whether an observed point of any view can lie in the box of half extents `half` at
+    /// `world_from_box`: false only when the box lies inside the grid and no occupied cell
+    /// comes within a cell's half diagonal of it (every observed point in the grid lies in an
+    /// occupied cell, within that of the cell's centre).
+    pub fn may_hold_observed(&self, world_from_box: &Pose3, half: Vec3) -> bool {
+        let grown = half + Vec3::splat(self.voxel_m * 0.87);
+        let (lo, hi) = world_bounds(world_from_box, grown);
+        let grid_lo = self.origin - Vec3::splat(self.voxel_m / 2.0);
+        let grid_hi = self.origin
+            + (Vec3::new(
+                self.dims[0] as f32,
+                self.dims[1] as f32,
+                self.dims[2] as f32,
+            ) - Vec3::splat(0.5))
+                * self.voxel_m;
+        if !(lo.cmpge(grid_lo).all() && hi.cmple(grid_hi).all()) {
+            return true;
+        }
+        let [_, _, occupied] = self.count_in_box(world_from_box, grown);
+        occupied > 0
+    }
+
     /// The worst cell whose centre lies in the box of half extents `half` at `world_from_box`
     /// (occupied over unknown over free); `None` when no cell centre lies in it.
     pub fn worst_in_box(&self, world_from_box: &Pose3, half: Vec3) -> Option<Occupancy> {
@@ -317,6 +329,22 @@ impl Fusion {
         .into_iter()
         .find_map(|(n, kind)| (n > 0).then_some(kind))
     }
+}
+
+/// The world bounds of the box of half extents `half` at `world_from_box`.
+fn world_bounds(world_from_box: &Pose3, half: Vec3) -> Bounds {
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for corner in 0..8 {
+        let sign = |bit: u32| if corner >> bit & 1 == 1 { 1.0 } else { -1.0 };
+        let p = world_from_box.transform_point(Vec3::new(
+            sign(0) * half.x,
+            sign(1) * half.y,
+            sign(2) * half.z,
+        ));
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    (lo, hi)
 }
 
 /// Whether `view` sees through the point `p` (world) to a surface more than `band` behind it.
@@ -396,6 +424,21 @@ mod tests {
             Some(Occupancy::Free)
         );
         assert_eq!(fusion.worst_in_box(&at(0.5, 0.0, 0.03), half), None);
+    }
+
+    #[test]
+    fn a_box_clear_of_every_occupied_cell_holds_no_observed_point() {
+        let fusion = Fusion::build(&[box_view(false)], &FusionParams::default()).unwrap();
+        let at = |x, y, z| Pose3::from_translation(Vec3::new(x, y, z));
+        let half = Vec3::splat(0.005);
+        // Above the box's top (z 5 cm) by 1 cm: clear; touching it, or reaching out of the
+        // grid: maybe.
+        assert!(!fusion.may_hold_observed(&at(0.0, 0.0, 0.065), half));
+        assert!(fusion.may_hold_observed(&at(0.0, 0.0, 0.054), half));
+        assert!(fusion.may_hold_observed(&at(0.0, 0.0, 0.098), half));
+        // Beside the box: reaching 1 mm into the table, maybe; 3 mm above it, clear.
+        assert!(fusion.may_hold_observed(&at(0.04, 0.0, 0.004), half));
+        assert!(!fusion.may_hold_observed(&at(0.04, 0.0, 0.008), half));
     }
 
     #[test]

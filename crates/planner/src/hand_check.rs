@@ -141,7 +141,7 @@ pub fn check_hand(
     {
         return Some(Rejection::HandBelowTable);
     }
-    if meets_any_view(&hand, &world_from_gripper, views) {
+    if meets_any_view(&hand, &world_from_gripper, views, fusion) {
         return Some(Rejection::HandMeetsObservedDepth);
     }
     // Observed points were tested exactly above; the cells say what no view has seen.
@@ -160,55 +160,71 @@ pub fn check_hand(
         .then_some(Rejection::HandEntersUnknownSpace)
 }
 
-/// Whether an observed point of some view lies in the hand.
-fn meets_any_view(hand: &HandShapes, world_from_gripper: &Pose3, views: &[View]) -> bool {
+/// Whether an observed point of some view lies in one of the hand's boxes grown by
+/// [`HAND_CLEARANCE_M`]. With the views fused, a box that the fused model says holds no
+/// observed point is not searched pixel by pixel.
+fn meets_any_view(
+    hand: &HandShapes,
+    world_from_gripper: &Pose3,
+    views: &[View],
+    fusion: Option<&Fusion>,
+) -> bool {
     let gripper_from_world = world_from_gripper.inverse();
-    views
-        .iter()
-        .any(|view| meets_observed_depth(hand, &gripper_from_world, view))
+    hand.boxes().iter().any(|(cuboid, box_pose)| {
+        let half = cuboid.half_extents + Vec3::splat(HAND_CLEARANCE_M);
+        if fusion.is_some_and(|f| !f.may_hold_observed(&(*world_from_gripper * *box_pose), half)) {
+            return false;
+        }
+        views
+            .iter()
+            .any(|view| box_meets_view(half, box_pose, &gripper_from_world, view))
+    })
 }
 
-/// Whether a point `view` observed lies inside one of the hand's boxes grown by
-/// [`HAND_CLEARANCE_M`].
-fn meets_observed_depth(hand: &HandShapes, gripper_from_world: &Pose3, view: &View) -> bool {
+/// Whether a point `view` observed lies inside the box of half extents `half` at
+/// `gripper_from_box`.
+fn box_meets_view(
+    half: Vec3,
+    gripper_from_box: &Pose3,
+    gripper_from_world: &Pose3,
+    view: &View,
+) -> bool {
     let gripper_from_camera = *gripper_from_world * view.camera.world_from_camera;
     let camera_from_gripper = gripper_from_camera.inverse();
     let k = view.depth.intrinsics();
-    hand.boxes().iter().any(|(cuboid, box_pose)| {
-        let half = cuboid.half_extents + Vec3::splat(HAND_CLEARANCE_M);
-        // The pixels the box can cover: its corners projected (the whole image when a corner
-        // is behind the camera).
-        let (mut lo, mut hi) = ([f32::INFINITY; 2], [f32::NEG_INFINITY; 2]);
-        for corner in 0..8 {
-            let sign = |bit: u32| if corner >> bit & 1 == 1 { 1.0 } else { -1.0 };
-            let local = Vec3::new(sign(0) * half.x, sign(1) * half.y, sign(2) * half.z);
-            let in_camera = camera_from_gripper.transform_point(box_pose.transform_point(local));
-            match k.project(in_camera) {
-                Some([u, v]) => {
-                    lo = [lo[0].min(u), lo[1].min(v)];
-                    hi = [hi[0].max(u), hi[1].max(v)];
-                }
-                None => {
-                    lo = [0.0, 0.0];
-                    hi = [k.width as f32, k.height as f32];
-                    break;
-                }
+    // The pixels the box can cover: its corners projected (the whole image when a corner is
+    // behind the camera).
+    let (mut lo, mut hi) = ([f32::INFINITY; 2], [f32::NEG_INFINITY; 2]);
+    for corner in 0..8 {
+        let sign = |bit: u32| if corner >> bit & 1 == 1 { 1.0 } else { -1.0 };
+        let local = Vec3::new(sign(0) * half.x, sign(1) * half.y, sign(2) * half.z);
+        let in_camera =
+            camera_from_gripper.transform_point(gripper_from_box.transform_point(local));
+        match k.project(in_camera) {
+            Some([u, v]) => {
+                lo = [lo[0].min(u), lo[1].min(v)];
+                hi = [hi[0].max(u), hi[1].max(v)];
+            }
+            None => {
+                lo = [0.0, 0.0];
+                hi = [k.width as f32, k.height as f32];
+                break;
             }
         }
-        let clamp_u = |x: f32| x.clamp(0.0, k.width.saturating_sub(1) as f32) as i64;
-        let clamp_v = |y: f32| y.clamp(0.0, k.height.saturating_sub(1) as f32) as i64;
-        let (u0, u1) = (clamp_u(lo[0].floor()), clamp_u(hi[0].ceil()));
-        let (v0, v1) = (clamp_v(lo[1].floor()), clamp_v(hi[1].ceil()));
-        let box_from_camera = box_pose.inverse() * gripper_from_camera;
-        (v0..=v1).any(|v| {
-            (u0..=u1).any(|u| {
-                let d = view.depth.at(u, v);
-                if d <= 0.0 {
-                    return false;
-                }
-                let p = box_from_camera.transform_point(k.unproject(u as f32, v as f32, d));
-                p.x.abs() < half.x && p.y.abs() < half.y && p.z.abs() < half.z
-            })
+    }
+    let clamp_u = |x: f32| x.clamp(0.0, k.width.saturating_sub(1) as f32) as i64;
+    let clamp_v = |y: f32| y.clamp(0.0, k.height.saturating_sub(1) as f32) as i64;
+    let (u0, u1) = (clamp_u(lo[0].floor()), clamp_u(hi[0].ceil()));
+    let (v0, v1) = (clamp_v(lo[1].floor()), clamp_v(hi[1].ceil()));
+    let box_from_camera = gripper_from_box.inverse() * gripper_from_camera;
+    (v0..=v1).any(|v| {
+        (u0..=u1).any(|u| {
+            let d = view.depth.at(u, v);
+            if d <= 0.0 {
+                return false;
+            }
+            let p = box_from_camera.transform_point(k.unproject(u as f32, v as f32, d));
+            p.x.abs() < half.x && p.y.abs() < half.y && p.z.abs() < half.z
         })
     })
 }
