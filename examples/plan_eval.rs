@@ -109,6 +109,10 @@ struct Args {
     /// at 3 depths; `plan`'s sampler default: 200).
     #[arg(long)]
     fused_grasps: Option<usize>,
+    /// A second network scores the virtual views too (gqcnn or mvgqcnn): the re-score is the
+    /// geometric mean of the two.
+    #[arg(long)]
+    second_scorer: Option<String>,
     /// The re-scoring network proposes no candidates of its own in the top-down view.
     #[arg(long)]
     no_top_down_proposals: bool,
@@ -294,6 +298,17 @@ fn run(args: &Args) -> Result<(), String> {
             scorer.params.candidates_per_view = args.rescore_candidates;
             scorer.params.perturbations = args.perturbations;
             scorer.params.propose_top_down = !args.no_top_down_proposals;
+            let second = match args.second_scorer.as_deref() {
+                None => None,
+                Some("gqcnn") => Some(load(models::GQCNN_TOPDOWN)?),
+                Some("mvgqcnn") => Some(load(models::MVGQCNN)?),
+                Some(other) => {
+                    return Err(format!(
+                        "--second-scorer {other}: expected gqcnn or mvgqcnn"
+                    ));
+                }
+            };
+            scorer.set_second(second).map_err(|e| e.to_string())?;
             if let Some(n) = args.fused_grasps {
                 policy.sampler.num_grasps = n;
             }

@@ -453,6 +453,34 @@ fn plan_over_a_rendered_views_folder() {
         mask.count()
     );
 
+    // The multi-view planner over the same folder: the views fused in the given frame (its
+    // z up from the fitted table), the best re-scored on virtual views; a grasp on the box.
+    let fused = Command::new(env!("CARGO_BIN_EXE_plan"))
+        .args([
+            "--views-dir",
+            views_dir.to_str().unwrap(),
+            "--fuse",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        fused.status.success(),
+        "{}",
+        String::from_utf8_lossy(&fused.stderr)
+    );
+    let file: serde_json::Value = serde_json::from_slice(&fused.stdout).unwrap();
+    let best = &file["grasps"][0];
+    assert!(best["view_quality"].as_f64().is_some(), "{best}");
+    let p = &best["p"];
+    let centre = Vec3::new(
+        p[0].as_f64().unwrap() as f32,
+        p[1].as_f64().unwrap() as f32,
+        p[2].as_f64().unwrap() as f32,
+    );
+    let nearest = nearest_in_plane(&top.depth, &top.camera, centre, |u, v, _| mask.at(u, v));
+    assert!(nearest < 0.015, "{:.1} cm from the box", nearest * 100.0);
+
     // One view of the folder through --depth: its PNG read in the dataset's 0.1 mm units
     // (not millimetres: the table would be 5 m away), its mask's object alone.
     // Its intrinsics are those of the folder's top-down camera, written as a plain JSON.

@@ -51,7 +51,7 @@ struct Args {
     /// checked against it (nothing observed, no unseen space, above the table); the best 10 of
     /// each view re-scored by the top-down GQ-CNN on virtual views along their approaches (the
     /// mean over 8 perturbed copies).
-    #[arg(long, conflicts_with_all = ["depth"])]
+    #[arg(long)]
     fuse: bool,
     /// Plan in the first N of the 10 test views (1: the top-down view alone). Default: 1 for a
     /// GQ-CNN, 10 for a multi-view GQ-CNN.
@@ -115,6 +115,17 @@ struct Args {
 
 /// Views the multi-view planner fuses unless told otherwise (the seed paper's setting).
 const FUSED_VIEWS: usize = 5;
+
+/// The multi-view planner's re-scoring: the top-down GQ-CNN on virtual views.
+fn add_virtual_scorer(
+    policy: &mut GqcnnPolicy,
+    gripper: &mvgrasp::grasp::Gripper,
+) -> Result<(), String> {
+    let net = models::GQCNN_TOPDOWN.load().map_err(|e| e.to_string())?;
+    let scorer = VirtualScorer::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
+    policy.virtual_scorer = Some(Box::new(scorer));
+    Ok(())
+}
 
 /// The network `--model` names, or the default for the planner.
 fn model_of(args: &Args) -> String {
@@ -204,10 +215,7 @@ fn run(args: &Args) -> Result<bool, String> {
         // The views spread over the whole cap (the first top-down), not the first of ten.
         params.views.count = params.max_views;
         params.fusion = Some(FusionParams::default());
-        let scorer = models::GQCNN_TOPDOWN.load().map_err(|e| e.to_string())?;
-        let scorer =
-            VirtualScorer::new(scorer, gripper.max_opening_m).map_err(|e| e.to_string())?;
-        policy.virtual_scorer = Some(Box::new(scorer));
+        add_virtual_scorer(&mut policy, &gripper)?;
     }
     let backend = Backend::parse(&args.backend).ok_or_else(|| {
         format!(
@@ -297,8 +305,12 @@ fn sensor_setup(
     let params = SensorPlanParams {
         hand_check: !args.no_hand_check,
         seed: args.object.seed,
+        fusion: args.fuse.then(FusionParams::default),
         ..Default::default()
     };
+    if args.fuse {
+        add_virtual_scorer(&mut policy, &gripper)?;
+    }
     Ok((model_name, policy, gripper, params))
 }
 

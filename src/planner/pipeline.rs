@@ -260,26 +260,14 @@ pub fn plan_grasp(
         .as_ref()
         .and_then(|f| Fusion::build(&scene.views, f));
     let fuse_s = started.elapsed().as_secs_f64();
-    let mut plan = policy.plan(&scene.views, params.seed)?;
-    let scorer = policy.virtual_scorer.as_deref().zip(fusion.as_ref());
-    if let Some((scorer, _)) = scorer {
-        plan.merge(scorer.propose(&scene.views, params.seed)?);
-    }
-    if params.hand_check {
-        match scorer {
-            // Every view's best are re-scored: checked in each view.
-            Some((s, _)) => plan.reject_colliding_each_view(
-                &scene.views,
-                fusion.as_ref(),
-                &gripper,
-                s.params.candidates_per_view.max(TOP_KEPT),
-            ),
-            None => plan.reject_colliding(&scene.views, fusion.as_ref(), &gripper, TOP_KEPT),
-        }
-    }
-    if let Some((scorer, fusion)) = scorer {
-        scorer.rescore(&mut plan, fusion, params.seed)?;
-    }
+    let plan = policy.plan_checked(
+        &scene.views,
+        fusion.as_ref(),
+        &gripper,
+        params.hand_check,
+        TOP_KEPT,
+        params.seed,
+    )?;
     let plan_s = started.elapsed().as_secs_f64();
 
     let started = Instant::now();

@@ -8,9 +8,13 @@ use std::time::Instant;
 
 use mvgrasp_geometry::{Camera, Intrinsics, read_camera_pose};
 use mvgrasp_planner::{
-    DepthImage, GqcnnPolicy, Mask, Plan, Rejections, ScoredGrasp, TableFit, TableFitParams, View,
-    fit_table, objects_above,
+    DepthImage, Fusion, FusionParams, GqcnnPolicy, Mask, Plan, Rejections, ScoredGrasp, TableFit,
+    TableFitParams, View, fit_table, objects_above,
 };
+
+/// With the views fused, the world's z must be within this of the fitted table's normal,
+/// degrees.
+const MAX_WORLD_TILT_DEG: f32 = 10.0;
 
 use crate::sensor_files::{read_depth_in_units, read_mask_of};
 use serde::Serialize;
@@ -43,6 +47,9 @@ pub struct SensorPlanParams {
     pub hand_check: bool,
     /// Seeds the sampler.
     pub seed: u64,
+    /// Fuse the views (see [`crate::planner::PlanParams::fusion`]); the table's height is the
+    /// first view's fitted table, in the world frame (whose z must point up from it).
+    pub fusion: Option<FusionParams>,
 }
 
 impl Default for SensorPlanParams {
@@ -51,6 +58,7 @@ impl Default for SensorPlanParams {
             table: TableFitParams::default(),
             hand_check: true,
             seed: 0,
+            fusion: None,
         }
     }
 }
@@ -132,7 +140,7 @@ pub fn plan_on_view(
     let table_s = started.elapsed().as_secs_f64();
     let started = Instant::now();
     let views = [located.view];
-    let plan = plan_views(policy, gripper, &views, params)?;
+    let plan = plan_views(policy, gripper, &views, &[located.table], params)?;
     let plan_s = started.elapsed().as_secs_f64();
     let [view] = views;
     Ok(SensorPlanReport {
@@ -183,13 +191,49 @@ fn plan_views(
     policy: &GqcnnPolicy,
     gripper: &mvgrasp_grasp::Gripper,
     views: &[View],
+    tables: &[TableFit],
     params: &SensorPlanParams,
 ) -> Result<Plan> {
-    let mut plan = policy.plan(views, params.seed)?;
-    if params.hand_check {
-        plan.reject_colliding(views, None, gripper, TOP_KEPT);
+    let fusion = match &params.fusion {
+        Some(fusion_params) => {
+            let table_z_m = table_height_in_world(&views[0], &tables[0])?;
+            Fusion::build(
+                views,
+                &FusionParams {
+                    table_z_m,
+                    ..fusion_params.clone()
+                },
+            )
+        }
+        None => None,
+    };
+    Ok(policy.plan_checked(
+        views,
+        fusion.as_ref(),
+        gripper,
+        params.hand_check,
+        TOP_KEPT,
+        params.seed,
+    )?)
+}
+
+/// The height of the table fitted in `view` in the world frame, which must have its z axis up
+/// from the table (the fused model is built in the table frame).
+fn table_height_in_world(view: &View, table: &TableFit) -> Result<f32> {
+    let world_from_camera = view.camera.world_from_camera;
+    let up = world_from_camera.rotation * table.up();
+    let tilt_deg = up.z.clamp(-1.0, 1.0).acos().to_degrees();
+    if tilt_deg > MAX_WORLD_TILT_DEG {
+        return Err(Error::Planning(mvgrasp_planner::PlannerError::Table(
+            format!(
+                "the world's z axis is {tilt_deg:.0} degrees from the table's normal: fusing the \
+             views needs camera poses in a frame whose z points up from the table"
+            ),
+        )));
     }
-    Ok(plan)
+    // The table's point under the camera: normal . p + height = 0.
+    let foot = table.up() * -table.camera_height_m;
+    Ok(world_from_camera.transform_point(foot).z)
 }
 
 /// The view of `files`: its depth with its intrinsics, posed by the pose file (else at the
@@ -387,7 +431,7 @@ pub fn plan_on_views_dir(
         tables.push(located.table);
         views.push(located.view);
     }
-    let plan = plan_views(policy, gripper, &views, params)?;
+    let plan = plan_views(policy, gripper, &views, &tables, params)?;
     Ok(ViewsPlanReport {
         views,
         tables,

@@ -252,6 +252,7 @@ mod tests {
             theta_rad: view.theta_rad(),
             quality: 0.9,
             view_quality: None,
+            by_scorer: false,
         }
     }
 
@@ -351,6 +352,7 @@ mod tests {
             theta_rad: 0.0,
             quality: 0.9,
             view_quality: None,
+            by_scorer: false,
         };
         let across = grasp(down);
         let panda = Gripper::default();

@@ -39,6 +39,18 @@ pub struct ScoredGrasp {
     /// The planning network's score on the view, where `quality` is a re-score.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub view_quality: Option<f32>,
+    /// Found by the virtual scorer's own network ([`crate::VirtualScorer::propose`]), not the
+    /// policy's.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub by_scorer: bool,
+}
+
+impl ScoredGrasp {
+    /// Which quota of the per-view hand check and re-scoring the candidate counts against:
+    /// its view's, the scorer's own candidates apart from the policy's.
+    pub fn quota(&self) -> (usize, bool) {
+        (self.view, self.by_scorer)
+    }
 }
 
 /// What the planner found in each view and overall.
@@ -69,7 +81,8 @@ impl Plan {
         self.reject_until(views, fusion, gripper, keep, false);
     }
 
-    /// [`Plan::reject_colliding`] until `keep` of each view have survived.
+    /// [`Plan::reject_colliding`] until `keep` of each view (and of each view's candidates
+    /// found by a virtual scorer, apart: [`ScoredGrasp::quota`]) have survived.
     pub fn reject_colliding_each_view(
         &mut self,
         views: &[View],
@@ -89,22 +102,23 @@ impl Plan {
         each_view: bool,
     ) {
         let mut kept = Vec::with_capacity(self.candidates.len());
-        // Survivors overall, or per view.
-        let mut survivors = vec![0usize; if each_view { views.len().max(1) } else { 1 }];
+        // Survivors overall, or per quota.
+        let mut survivors = std::collections::HashMap::<(usize, bool), usize>::new();
         for candidate in std::mem::take(&mut self.candidates) {
             let slot = if each_view {
-                candidate.view.min(survivors.len() - 1)
+                candidate.quota()
             } else {
-                0
+                (0, false)
             };
-            if survivors[slot] >= keep {
+            let survivors = survivors.entry(slot).or_default();
+            if *survivors >= keep {
                 kept.push(candidate);
                 continue;
             }
             match check_hand(&candidate, views, fusion, gripper) {
                 Some(rejection) => self.rejections.add(rejection),
                 None => {
-                    survivors[slot] += 1;
+                    *survivors += 1;
                     kept.push(candidate);
                 }
             }
@@ -214,6 +228,45 @@ impl GqcnnPolicy {
         })
     }
 
+    /// The whole plan over `views`: [`GqcnnPolicy::plan`]; with the views fused and a virtual
+    /// scorer, the scorer's own top-down proposals merged in; the hand check (unless
+    /// `hand_check` is false) against the views and the fused model, until `keep` survive (of
+    /// each view when re-scoring, so that every view's best are re-scored); then the
+    /// re-scoring.
+    ///
+    /// # Errors
+    /// See [`GqcnnPolicy::plan`]; a network error while re-scoring.
+    pub fn plan_checked(
+        &self,
+        views: &[View],
+        fusion: Option<&Fusion>,
+        gripper: &Gripper,
+        hand_check: bool,
+        keep: usize,
+        seed: u64,
+    ) -> Result<Plan> {
+        let mut plan = self.plan(views, seed)?;
+        let scorer = self.virtual_scorer.as_deref().zip(fusion);
+        if let Some((scorer, _)) = scorer {
+            plan.merge(scorer.propose(views, seed)?);
+        }
+        if hand_check {
+            match scorer {
+                Some((s, _)) => plan.reject_colliding_each_view(
+                    views,
+                    fusion,
+                    gripper,
+                    s.params.candidates_per_view.max(keep),
+                ),
+                None => plan.reject_colliding(views, fusion, gripper, keep),
+            }
+        }
+        if let Some((scorer, fusion)) = scorer {
+            scorer.rescore(&mut plan, fusion, seed)?;
+        }
+        Ok(plan)
+    }
+
     /// The scored candidates of one view, in sampling order (then the cross-entropy method's,
     /// round by round).
     fn score_view(&self, index: usize, view: &View, seed: u64) -> Result<Vec<ScoredGrasp>> {
@@ -245,6 +298,7 @@ impl GqcnnPolicy {
                 theta_rad: theta,
                 quality: q,
                 view_quality: None,
+                by_scorer: false,
             })
             .collect())
     }

@@ -17,9 +17,10 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::contract::InputContract;
 use crate::crop::CropParams;
 use crate::depth_image::View;
-use crate::error::Result;
+use crate::error::{PlannerError, Result};
 use crate::fusion::Fusion;
 use crate::policy::{GqcnnPolicy, Plan, ScoredGrasp};
 use crate::seed::splitmix;
@@ -190,6 +191,8 @@ pub fn virtual_crop(
 pub struct VirtualScorer {
     /// The network, with its sampler and contract, for the candidates it proposes itself.
     pub policy: GqcnnPolicy,
+    /// A second network that scores the same virtual crops ([`VirtualScorer::set_second`]).
+    second: Option<Gqcnn>,
     /// The views, the candidates re-scored and the perturbations.
     pub params: VirtualViewParams,
 }
@@ -202,8 +205,29 @@ impl VirtualScorer {
     pub fn new(net: Gqcnn, max_width_m: f32) -> Result<Self> {
         Ok(Self {
             policy: GqcnnPolicy::new(net, max_width_m)?,
+            second: None,
             params: VirtualViewParams::default(),
         })
+    }
+
+    /// A second network that scores the same virtual crops, the score then being the geometric
+    /// mean of the two (a candidate must please both); `None`: the scorer's network alone.
+    ///
+    /// # Errors
+    /// [`PlannerError::Network`] when the second network takes other crops.
+    pub fn set_second(&mut self, net: Option<Gqcnn>) -> Result<()> {
+        if let Some(net) = &net
+            && InputContract::of(net) != self.policy.contract
+        {
+            let arch = net.architecture();
+            return Err(PlannerError::Network {
+                image_px: arch.image_size_px,
+                pose_inputs: arch.pose_inputs,
+                crop_px: self.policy.contract.crop.size_px,
+            });
+        }
+        self.second = net;
+        Ok(())
     }
 
     /// The candidates the scorer's network finds itself in the views that look (nearly)
@@ -231,6 +255,7 @@ impl VirtualScorer {
             .into_iter()
             .map(|c| ScoredGrasp {
                 view: indices[c.view],
+                by_scorer: true,
                 ..c
             })
             .collect())
@@ -272,7 +297,9 @@ impl VirtualScorer {
         let contract = self.policy.contract;
         let crop = contract.crop;
         let side = crop.size_px as usize;
-        let pose_inputs = self.policy.net().architecture().pose_inputs;
+        let nets: Vec<&Gqcnn> = std::iter::once(self.policy.net())
+            .chain(self.second.as_ref())
+            .collect();
         let mut workspace = GqcnnWorkspace::default();
         let mut quality = Vec::with_capacity(posed.len());
         for chunk in posed.chunks(256) {
@@ -284,17 +311,29 @@ impl VirtualScorer {
             crops.par_extend(chunk.par_iter().zip(&distances).flat_map_iter(|(g, &d)| {
                 virtual_crop(fusion, g, &crop, contract.focal_px, d, p.front_tolerance_m)
             }));
-            let mut poses = Vec::with_capacity(chunk.len() * pose_inputs);
-            for (g, &d) in chunk.iter().zip(&distances) {
-                poses.push(d);
-                if pose_inputs == 2 {
-                    // The virtual camera's angle to the table: the approach's.
-                    poses.push((-g.approach().z).clamp(-1.0, 1.0).asin());
+            let depth = Tensor::new(&[chunk.len(), 1, side, side], crops)?;
+            // Each network's score; with two, their geometric mean (both must like it).
+            let mut combined = vec![1.0f32; chunk.len()];
+            for net in &nets {
+                let pose_inputs = net.architecture().pose_inputs;
+                let mut poses = Vec::with_capacity(chunk.len() * pose_inputs);
+                for (g, &d) in chunk.iter().zip(&distances) {
+                    poses.push(d);
+                    if pose_inputs == 2 {
+                        // The virtual camera's angle to the table: the approach's.
+                        poses.push((-g.approach().z).clamp(-1.0, 1.0).asin());
+                    }
+                }
+                let pose = Tensor::new(&[chunk.len(), pose_inputs], poses)?;
+                for (c, q) in combined
+                    .iter_mut()
+                    .zip(net.predict(&depth, &pose, &mut workspace)?)
+                {
+                    *c *= q;
                 }
             }
-            let depth = Tensor::new(&[chunk.len(), 1, side, side], crops)?;
-            let pose = Tensor::new(&[chunk.len(), pose_inputs], poses)?;
-            quality.extend(self.policy.net().predict(&depth, &pose, &mut workspace)?);
+            let root = 1.0 / nets.len() as f32;
+            quality.extend(combined.into_iter().map(|q| q.powf(root)));
         }
         Ok(quality
             .chunks(copies)
@@ -302,17 +341,18 @@ impl VirtualScorer {
             .collect())
     }
 
-    /// Re-scores the best `params.candidates_per_view` of each view in `plan` on their virtual
+    /// Re-scores the best `params.candidates_per_view` of each view in `plan` (and as many of
+    /// the scorer's own candidates in each view, apart: [`ScoredGrasp::quota`]) on their virtual
     /// views and ranks them by that score ahead of the rest (which keep their order); each
     /// keeps the score it was planned with in [`ScoredGrasp::view_quality`].
     ///
     /// # Errors
     /// A network error.
     pub fn rescore(&self, plan: &mut Plan, fusion: &Fusion, seed: u64) -> Result<()> {
-        let mut per_view = std::collections::HashMap::<usize, usize>::new();
+        let mut per_view = std::collections::HashMap::<(usize, bool), usize>::new();
         let (mut head, mut rest): (Vec<ScoredGrasp>, Vec<ScoredGrasp>) = (Vec::new(), Vec::new());
         for c in std::mem::take(&mut plan.candidates) {
-            let n = per_view.entry(c.view).or_default();
+            let n = per_view.entry(c.quota()).or_default();
             if *n < self.params.candidates_per_view {
                 *n += 1;
                 head.push(c);
