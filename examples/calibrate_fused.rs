@@ -347,6 +347,7 @@ fn within_objects(trials: &[Trial]) {
     }
     let mut aucs = Vec::new();
     let mut first_held = 0;
+    let mut first_held_top_down = 0;
     for ts in by_object.values() {
         let (held, failed): (Vec<&&Trial>, Vec<&&Trial>) = ts.iter().partition(|t| t.held);
         if !held.is_empty() && !failed.is_empty() {
@@ -363,13 +364,45 @@ fn within_objects(trials: &[Trial]) {
         }
         let first = ts.iter().max_by(|a, b| a.score.total_cmp(&b.score));
         first_held += usize::from(first.is_some_and(|t| t.held));
+        let first_top_down = ts
+            .iter()
+            .filter(|t| t.tilt_rad.to_degrees() < 15.0)
+            .max_by(|a, b| a.score.total_cmp(&b.score));
+        first_held_top_down += usize::from(first_top_down.is_some_and(|t| t.held));
     }
     println!(
         "within objects: AUC of the score {:.3} (mean over {} objects with both outcomes); the \
-         best-scored candidate held on {first_held} of {} objects",
+         best-scored candidate held on {first_held} of {} objects, the best-scored within 15 \
+         degrees of vertical on {first_held_top_down}",
         aucs.iter().sum::<f64>() / aucs.len().max(1) as f64,
         aucs.len(),
         by_object.len()
+    );
+    // The first choice when a tilted candidate (over 15 degrees) must win by a margin.
+    let margins = [0.02f32, 0.05, 0.1, 0.2];
+    let held_with_margin: Vec<usize> = margins
+        .iter()
+        .map(|&margin| {
+            by_object
+                .values()
+                .filter(|ts| {
+                    let key = |t: &&&Trial| {
+                        t.score
+                            - if t.tilt_rad.to_degrees() > 15.0 {
+                                margin
+                            } else {
+                                0.0
+                            }
+                    };
+                    ts.iter()
+                        .max_by(|a, b| key(a).total_cmp(&key(b)))
+                        .is_some_and(|t| t.held)
+                })
+                .count()
+        })
+        .collect();
+    println!(
+        "  a tilted first choice must win by {margins:?}: held on {held_with_margin:?} objects"
     );
     for (lo, hi) in [(0.0f32, 15.0f32), (15.0, 45.0), (45.0, 91.0)] {
         let bin: Vec<&Trial> = trials

@@ -38,7 +38,7 @@ mod native {
     #[pymodule_export]
     use crate::networks::load_network;
     #[pymodule_export]
-    use crate::planning::plan_depth;
+    use crate::planning::{plan_depth, plan_views};
 
     #[pymodule_init]
     fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -1,11 +1,13 @@
-//! Planning from NumPy: a depth image (and its camera matrix, optional mask and pose) to the
-//! ranked grasps, as `plan --depth ... --json` prints them (`grasps.json`).
+//! Planning from NumPy: depth images (with their camera matrices, optional masks and poses) to
+//! the ranked grasps, as `plan --depth ... --json` and `plan --views-dir ... --json` print them
+//! (`grasps.json`).
 
 use std::path::Path;
 
 use mvgrasp::grasps_file::{GraspsFile, WorldFrame};
 use mvgrasp::planner::{
-    CemParams, DepthImage, GqcnnPolicy, PlanParams, SensorPlanParams, View, models, plan_on_view,
+    CemParams, DepthImage, FusionParams, GqcnnPolicy, Mask, PlanParams, SensorPlanParams, View,
+    VirtualScorer, models, plan_on_view, plan_on_views,
 };
 use mvgrasp_geometry::{Camera, Intrinsics, Pose3, pose_from_rows};
 use mvgrasp_infer::Gqcnn;
@@ -16,18 +18,142 @@ use pyo3::prelude::*;
 use crate::convert::to_python;
 use crate::errors::{WeightsError, pipeline_error};
 
+/// A depth image's size and values: (H, W) or (H, W, 1) float32 metres; `name` names the
+/// argument in errors.
+fn depth_of(name: &str, depth: &PyReadonlyArrayDyn<'_, f32>) -> PyResult<(u32, u32, Vec<f32>)> {
+    let shape = depth.as_array().shape().to_vec();
+    let (height, width) = match shape[..] {
+        [h, w] | [h, w, 1] => (h, w),
+        _ => {
+            return Err(PyValueError::new_err(format!(
+                "{name}: shape {shape:?}, expected (H, W) or (H, W, 1)"
+            )));
+        }
+    };
+    let size =
+        |n: usize| u32::try_from(n).map_err(|e| PyValueError::new_err(format!("{name}: {e}")));
+    Ok((
+        size(width)?,
+        size(height)?,
+        depth.as_array().iter().copied().collect(),
+    ))
+}
+
+/// The intrinsics of a 3x3 camera matrix without skew, for a `width` x `height` image.
+fn intrinsics_of(
+    name: &str,
+    k: &PyReadonlyArray2<'_, f64>,
+    width: u32,
+    height: u32,
+) -> PyResult<Intrinsics> {
+    let k = k.as_array();
+    if k.shape() != [3, 3] {
+        return Err(PyValueError::new_err(format!(
+            "{name}: shape {:?}, expected (3, 3)",
+            k.shape()
+        )));
+    }
+    if k[[0, 1]] != 0.0 || k[[1, 0]] != 0.0 || [k[[2, 0]], k[[2, 1]], k[[2, 2]]] != [0.0, 0.0, 1.0]
+    {
+        return Err(PyValueError::new_err(format!(
+            "{name}: expected [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] (no skew)"
+        )));
+    }
+    Intrinsics::new(
+        k[[0, 0]] as f32,
+        k[[1, 1]] as f32,
+        k[[0, 2]] as f32,
+        k[[1, 2]] as f32,
+        width,
+        height,
+        0.1,
+        2.0,
+    )
+    .map_err(|e| PyValueError::new_err(format!("{name}: {e}")))
+}
+
+/// A mask's pixels, which must be the depth's size.
+fn mask_of(
+    name: &str,
+    mask: &PyReadonlyArray2<'_, bool>,
+    width: u32,
+    height: u32,
+) -> PyResult<Vec<bool>> {
+    let m = mask.as_array();
+    if m.shape() != [height as usize, width as usize] {
+        return Err(PyValueError::new_err(format!(
+            "{name}: shape {:?}, expected the depth's ({height}, {width})",
+            m.shape()
+        )));
+    }
+    Ok(m.iter().copied().collect())
+}
+
+/// A rigid 4x4 pose (rows).
+fn pose_of(name: &str, pose: &PyReadonlyArray2<'_, f64>) -> PyResult<Pose3> {
+    let p = pose.as_array();
+    if p.shape() != [4, 4] {
+        return Err(PyValueError::new_err(format!(
+            "{name}: shape {:?}, expected (4, 4)",
+            p.shape()
+        )));
+    }
+    let rows = std::array::from_fn(|i| std::array::from_fn(|j| p[[i, j]]));
+    pose_from_rows(rows).map_err(|e| PyValueError::new_err(format!("{name}: {e}")))
+}
+
+/// The network `model` names (a shipped one or an export's JSON); `None`: the planner's
+/// default, the multi-view GQ-CNN when fusing, else the top-down GQ-CNN.
+fn network(model: Option<&str>, fuse: bool) -> PyResult<Gqcnn> {
+    let model = model.unwrap_or(if fuse {
+        models::MVGQCNN.name
+    } else {
+        models::GQCNN_TOPDOWN.name
+    });
+    match models::shipped(model) {
+        Some(shipped) => shipped.load().map_err(|e| e.to_string()),
+        None => Gqcnn::load(Path::new(model)).map_err(|e| e.to_string()),
+    }
+    .map_err(|e| WeightsError::new_err(format!("{model}: {e}")))
+}
+
+/// The policy and settings of `plan` with these options.
+fn planner(
+    net: Gqcnn,
+    fuse: bool,
+    cem: bool,
+    hand_check: bool,
+    seed: u64,
+) -> mvgrasp::Result<(GqcnnPolicy, mvgrasp::grasp::Gripper, SensorPlanParams)> {
+    let gripper = PlanParams::default().labels.gripper()?;
+    let mut policy = GqcnnPolicy::new(net, gripper.max_opening_m)?;
+    policy.cem = cem.then(CemParams::default);
+    if fuse {
+        let scorer = VirtualScorer::new(models::GQCNN_TOPDOWN.load()?, gripper.max_opening_m)?;
+        policy.virtual_scorer = Some(Box::new(scorer));
+    }
+    let params = SensorPlanParams {
+        hand_check,
+        seed,
+        fusion: fuse.then(FusionParams::default),
+        ..Default::default()
+    };
+    Ok((policy, gripper, params))
+}
+
 /// Plans a grasp on one depth image, as `plan --depth` does, and returns the content of
 /// `grasps.json` (format `mvgrasp-grasps/1`) as a dict.
 ///
 /// `depth`: float32 metres, shape (H, W) or (H, W, 1); NaN, infinities and 0 are missing.
 /// `k`: the 3x3 camera matrix (no skew). `mask`: bool (H, W), the object's pixels.
 /// `world_from_camera`: the camera's 4x4 pose (rows); without it the world is put on the table
-/// fitted in the image. `model`: a shipped network's name or an export's `NAME.json`.
-/// Raises `ValueError` for arrays of the wrong shape or values, `TypeError` for other dtypes,
-/// `mvgrasp.PlanningError` when there is no table or nothing on it, `mvgrasp.WeightsError`
-/// for a network that cannot be loaded.
+/// fitted in the image. `model`: a shipped network's name or an export's `NAME.json`. `fuse`:
+/// the multi-view planner's checks and re-scoring (`plan --fuse`). Raises `ValueError` for
+/// arrays of the wrong shape or values, `TypeError` for other dtypes, `mvgrasp.PlanningError`
+/// when there is no table or nothing on it, `mvgrasp.WeightsError` for a network that cannot be
+/// loaded.
 #[pyfunction]
-#[pyo3(signature = (depth, k, *, mask = None, world_from_camera = None, model = "gqcnn_small_topdown", cem = false, hand_check = true, seed = 0))]
+#[pyo3(signature = (depth, k, *, mask = None, world_from_camera = None, model = None, fuse = false, cem = false, hand_check = true, seed = 0))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn plan_depth<'py>(
     py: Python<'py>,
@@ -35,101 +161,29 @@ pub(crate) fn plan_depth<'py>(
     k: PyReadonlyArray2<'py, f64>,
     mask: Option<PyReadonlyArray2<'py, bool>>,
     world_from_camera: Option<PyReadonlyArray2<'py, f64>>,
-    model: &str,
+    model: Option<&str>,
+    fuse: bool,
     cem: bool,
     hand_check: bool,
     seed: u64,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let shape = depth.as_array().shape().to_vec();
-    let (height, width) = match shape[..] {
-        [h, w] | [h, w, 1] => (h, w),
-        _ => {
-            return Err(PyValueError::new_err(format!(
-                "depth: shape {shape:?}, expected (H, W) or (H, W, 1)"
-            )));
-        }
-    };
-    let values: Vec<f32> = depth.as_array().iter().copied().collect();
-    let k = k.as_array();
-    if k.shape() != [3, 3] {
-        return Err(PyValueError::new_err(format!(
-            "k: shape {:?}, expected (3, 3)",
-            k.shape()
-        )));
-    }
-    if k[[0, 1]] != 0.0 || k[[1, 0]] != 0.0 || [k[[2, 0]], k[[2, 1]], k[[2, 2]]] != [0.0, 0.0, 1.0]
-    {
-        return Err(PyValueError::new_err(
-            "k: expected [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] (no skew)",
-        ));
-    }
-    let (w, h) = (
-        u32::try_from(width).map_err(|e| PyValueError::new_err(format!("depth: {e}")))?,
-        u32::try_from(height).map_err(|e| PyValueError::new_err(format!("depth: {e}")))?,
-    );
-    let intrinsics = Intrinsics::new(
-        k[[0, 0]] as f32,
-        k[[1, 1]] as f32,
-        k[[0, 2]] as f32,
-        k[[1, 2]] as f32,
-        w,
-        h,
-        0.1,
-        2.0,
-    )
-    .map_err(|e| PyValueError::new_err(format!("k: {e}")))?;
-    let mask = match mask {
-        Some(m) => {
-            let m = m.as_array();
-            if m.shape() != [height, width] {
-                return Err(PyValueError::new_err(format!(
-                    "mask: shape {:?}, expected the depth's ({height}, {width})",
-                    m.shape()
-                )));
-            }
-            Some(m.iter().copied().collect::<Vec<bool>>())
-        }
-        None => None,
-    };
-    let pose = match world_from_camera {
-        Some(p) => {
-            let p = p.as_array();
-            if p.shape() != [4, 4] {
-                return Err(PyValueError::new_err(format!(
-                    "world_from_camera: shape {:?}, expected (4, 4)",
-                    p.shape()
-                )));
-            }
-            let rows = std::array::from_fn(|i| std::array::from_fn(|j| p[[i, j]]));
-            Some(
-                pose_from_rows(rows)
-                    .map_err(|e| PyValueError::new_err(format!("world_from_camera: {e}")))?,
-            )
-        }
-        None => None,
-    };
-    let net = match models::shipped(model) {
-        Some(shipped) => shipped.load().map_err(|e| e.to_string()),
-        None => Gqcnn::load(Path::new(model)).map_err(|e| e.to_string()),
-    }
-    .map_err(|e| WeightsError::new_err(format!("{model}: {e}")))?;
+    let (w, h, values) = depth_of("depth", &depth)?;
+    let intrinsics = intrinsics_of("k", &k, w, h)?;
+    let mask = mask.map(|m| mask_of("mask", &m, w, h)).transpose()?;
+    let pose = world_from_camera
+        .map(|p| pose_of("world_from_camera", &p))
+        .transpose()?;
+    let net = network(model, fuse)?;
     let file = py.detach(|| -> mvgrasp::Result<GraspsFile> {
-        let gripper = PlanParams::default().labels.gripper()?;
-        let mut policy = GqcnnPolicy::new(net, gripper.max_opening_m)?;
-        policy.cem = cem.then(CemParams::default);
+        let (policy, gripper, params) = planner(net, fuse, cem, hand_check, seed)?;
         let camera = Camera {
             intrinsics,
             world_from_camera: pose.unwrap_or(Pose3::IDENTITY),
         };
         let mut view = View::new(0, camera, DepthImage::new(intrinsics, values)?)?;
         if let Some(pixels) = mask {
-            view = view.with_mask(mvgrasp::planner::Mask::new(w, h, pixels)?)?;
+            view = view.with_mask(Mask::new(w, h, pixels)?)?;
         }
-        let params = SensorPlanParams {
-            hand_check,
-            seed,
-            ..Default::default()
-        };
         let report = plan_on_view(&policy, &gripper, view, pose.is_some(), &params)?;
         let frame = if pose.is_some() {
             WorldFrame::Given
@@ -142,6 +196,83 @@ pub(crate) fn plan_depth<'py>(
             &report.top,
             report.rejections,
             Some(report.table),
+        ))
+    });
+    to_python(py, &file.map_err(pipeline_error)?)
+}
+
+/// Plans a grasp over several depth images of one scene, as `plan --views-dir` does, and
+/// returns the content of `grasps.json` as a dict (its frame: the cameras' given one).
+///
+/// `depths`: one float32 (H, W) image per view (metres); `ks`: their 3x3 camera matrices;
+/// `world_from_cameras`: their 4x4 poses in one world frame (with `fuse`, its z up from the
+/// table); `masks`: per view a bool (H, W) mask of the object or `None`. The options are
+/// `plan_depth`'s. Raises `ValueError` when the lists' lengths differ or for a bad array (the
+/// message names it, e.g. `depths[2]`), and `plan_depth`'s errors.
+#[pyfunction]
+#[pyo3(signature = (depths, ks, world_from_cameras, *, masks = None, model = None, fuse = false, cem = false, hand_check = true, seed = 0))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn plan_views<'py>(
+    py: Python<'py>,
+    depths: Vec<PyReadonlyArrayDyn<'py, f32>>,
+    ks: Vec<PyReadonlyArray2<'py, f64>>,
+    world_from_cameras: Vec<PyReadonlyArray2<'py, f64>>,
+    masks: Option<Vec<Option<PyReadonlyArray2<'py, bool>>>>,
+    model: Option<&str>,
+    fuse: bool,
+    cem: bool,
+    hand_check: bool,
+    seed: u64,
+) -> PyResult<Bound<'py, PyAny>> {
+    let n = depths.len();
+    if n == 0
+        || ks.len() != n
+        || world_from_cameras.len() != n
+        || masks.as_ref().is_some_and(|m| m.len() != n)
+    {
+        return Err(PyValueError::new_err(format!(
+            "depths, ks, world_from_cameras (and masks): one per view, got {n}, {}, {}{}",
+            ks.len(),
+            world_from_cameras.len(),
+            masks
+                .as_ref()
+                .map_or(String::new(), |m| format!(", {}", m.len()))
+        )));
+    }
+    let mut inputs = Vec::with_capacity(n);
+    for i in 0..n {
+        let (w, h, values) = depth_of(&format!("depths[{i}]"), &depths[i])?;
+        let intrinsics = intrinsics_of(&format!("ks[{i}]"), &ks[i], w, h)?;
+        let pose = pose_of(&format!("world_from_cameras[{i}]"), &world_from_cameras[i])?;
+        let mask = match masks.as_ref().and_then(|m| m[i].as_ref()) {
+            Some(m) => Some(mask_of(&format!("masks[{i}]"), m, w, h)?),
+            None => None,
+        };
+        inputs.push((intrinsics, values, pose, mask));
+    }
+    let net = network(model, fuse)?;
+    let file = py.detach(|| -> mvgrasp::Result<GraspsFile> {
+        let (policy, gripper, params) = planner(net, fuse, cem, hand_check, seed)?;
+        let mut views = Vec::with_capacity(n);
+        for (i, (intrinsics, values, pose, mask)) in inputs.into_iter().enumerate() {
+            let camera = Camera {
+                intrinsics,
+                world_from_camera: pose,
+            };
+            let mut view = View::new(i, camera, DepthImage::new(intrinsics, values)?)?;
+            if let Some(pixels) = mask {
+                view = view.with_mask(Mask::new(intrinsics.width, intrinsics.height, pixels)?)?;
+            }
+            views.push(view);
+        }
+        let report = plan_on_views(&policy, &gripper, views, &params)?;
+        let cameras: Vec<Camera> = report.views.iter().map(|v| v.camera).collect();
+        Ok(GraspsFile::new(
+            WorldFrame::Given,
+            &cameras,
+            &report.top,
+            report.rejections,
+            report.tables.first().copied(),
         ))
     });
     to_python(py, &file.map_err(pipeline_error)?)

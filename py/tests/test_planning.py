@@ -68,3 +68,60 @@ def test_bad_arrays_raise_value_and_type_errors() -> None:
         mvgrasp.plan_depth(np.full((480, 640), 0.7, dtype=np.float32), PRIMESENSE_K)
     with pytest.raises(mvgrasp.WeightsError, match="no_such_model"):
         mvgrasp.plan_depth(depth, PRIMESENSE_K, model="no_such_model.json")
+
+
+def box_seen_from(eye: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """The 4 x 6 cm box, 5 cm tall, on a table (z = 0) at the origin, seen by a Primesense at
+    ``eye`` looking at it: exact depth by ray casting, and the camera's ``world_from_camera``."""
+    eye_v = np.array(eye, dtype=np.float64)
+    z = np.array([0.0, 0.0, 0.02]) - eye_v
+    z /= np.linalg.norm(z)
+    x = np.cross(z, [0.0, 1.0, 0.0])
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    pose = np.eye(4)
+    pose[:3, :3] = np.stack([x, y, z], axis=1)
+    pose[:3, 3] = eye_v
+    v, u = np.mgrid[0:480, 0:640].astype(np.float64)
+    rays = np.stack([(u - 319.5) / 525.0, (v - 239.5) / 525.0, np.ones_like(u)], axis=-1)
+    rays = rays @ pose[:3, :3].T  # the parameter along these is the depth
+    lo, hi = np.array([-0.02, -0.03, 0.0]), np.array([0.02, 0.03, 0.05])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ta, tb = (lo - eye_v) / rays, (hi - eye_v) / rays
+        near = np.max(np.minimum(ta, tb), axis=-1)
+        far = np.min(np.maximum(ta, tb), axis=-1)
+        table = np.where(rays[..., 2] < 0, -eye_v[2] / rays[..., 2], 0.0)
+    depth = np.where((near <= far) & (near > 0), near, table)
+    return depth.astype(np.float32), pose
+
+
+def test_several_views_plan_together_and_fused() -> None:
+    seen = [box_seen_from((0.0, 0.0, 0.7)), box_seen_from((-0.35, 0.0, 0.6))]
+    depths = [d for d, _ in seen]
+    poses = [p for _, p in seen]
+    ks = [PRIMESENSE_K, PRIMESENSE_K]
+    for fuse in (False, True):
+        result = mvgrasp.plan_views(depths, ks, poses, fuse=fuse)
+        assert result["frame"] == "given"
+        assert len(result["views"]) == 2
+        best = result["grasps"][0]
+        x, y, z = best["p"]
+        assert abs(x) < 0.03 and abs(y) < 0.04 and 0.0 < z < 0.06, best["p"]
+        # The multi-view planner's choices carry the score they were planned with.
+        assert ("view_quality" in best) == fuse
+        assert mvgrasp.plan_views(depths, ks, poses, fuse=fuse) == result
+
+
+def test_several_views_name_the_bad_one() -> None:
+    depth, pose = box_seen_from((0.0, 0.0, 0.7))
+    with pytest.raises(ValueError, match="one per view"):
+        mvgrasp.plan_views([depth, depth], [PRIMESENSE_K], [pose, pose])
+    with pytest.raises(ValueError, match=r"depths\[1\]: shape"):
+        mvgrasp.plan_views([depth, depth[None]], [PRIMESENSE_K] * 2, [pose, pose])
+    with pytest.raises(ValueError, match=r"world_from_cameras\[0\]"):
+        mvgrasp.plan_views([depth], [PRIMESENSE_K], [2.0 * np.eye(4)])
+    # Fusing needs the world's z up from the table: this world is turned on its side.
+    turned = np.eye(4)
+    turned[:3, :3] = [[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]]
+    with pytest.raises(mvgrasp.PlanningError, match="z axis is 90 degrees"):
+        mvgrasp.plan_views([depth], [PRIMESENSE_K], [turned @ pose], fuse=True)

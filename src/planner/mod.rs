@@ -16,5 +16,6 @@ pub use pipeline::{
 };
 pub use sensor::{
     ObjectSource, SensorFiles, SensorPlanParams, SensorPlanReport, ViewsPlanReport,
-    plan_on_sensor_depth, plan_on_view, plan_on_views_dir, read_view, read_views_dir,
+    plan_on_sensor_depth, plan_on_view, plan_on_views, plan_on_views_dir, read_view,
+    read_views_dir,
 };

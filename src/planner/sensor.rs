@@ -419,10 +419,25 @@ pub fn plan_on_views_dir(
     dir: &Path,
     params: &SensorPlanParams,
 ) -> Result<ViewsPlanReport> {
+    plan_on_views(policy, gripper, read_views_dir(dir)?, params)
+}
+
+/// [`plan_on_views_dir`] on views in memory, each with its camera's pose (and its mask, if it
+/// has one).
+///
+/// # Errors
+/// No table in a view, nothing on it (without a mask), the world's z not up from the table
+/// (with the views fused), or a network error.
+pub fn plan_on_views(
+    policy: &GqcnnPolicy,
+    gripper: &mvgrasp_grasp::Gripper,
+    read: Vec<View>,
+    params: &SensorPlanParams,
+) -> Result<ViewsPlanReport> {
     let mut views = Vec::new();
     let mut tables = Vec::new();
     let mut objects = Vec::new();
-    for view in read_views_dir(dir)? {
+    for view in read {
         let located = locate(view, true, params)?;
         objects.push((
             located.object,

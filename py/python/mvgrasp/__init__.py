@@ -24,6 +24,7 @@ from mvgrasp._native import (
     load_mesh,
     load_network,
     plan_depth,
+    plan_views,
     write_grasp_manifest,
 )
 
@@ -43,5 +44,6 @@ __all__ = [
     "load_mesh",
     "load_network",
     "plan_depth",
+    "plan_views",
     "write_grasp_manifest",
 ]

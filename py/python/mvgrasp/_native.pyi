@@ -1,7 +1,7 @@
 """Type stubs of the native module ``mvgrasp._native`` (built from py/src by maturin)."""
 
 import os
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -62,7 +62,8 @@ def plan_depth(
     *,
     mask: npt.NDArray[np.bool_] | None = None,
     world_from_camera: npt.NDArray[np.float64] | None = None,
-    model: str = "gqcnn_small_topdown",
+    model: str | None = None,
+    fuse: bool = False,
     cem: bool = False,
     hand_check: bool = True,
     seed: int = 0,
@@ -73,7 +74,9 @@ def plan_depth(
     missing. ``k``: the 3x3 camera matrix (no skew). ``mask``: bool ``(H, W)``, the object's
     pixels (without it, the object is what stands on the table fitted in the image).
     ``world_from_camera``: the camera's 4x4 pose (without it the world is put on the fitted
-    table). ``model``: a shipped network's name or an export's ``NAME.json``.
+    table). ``model``: a shipped network's name or an export's ``NAME.json`` (default: the
+    top-down GQ-CNN; with ``fuse``, the multi-view GQ-CNN). ``fuse``: the multi-view planner's
+    checks against the fused views and its re-scoring on virtual views (``plan --fuse``).
 
     Returns the content of ``grasps.json`` (format ``mvgrasp-grasps/1``): ``frame``,
     ``views``, ``grasps`` (best first, each with ``camera_from_gripper`` and
@@ -85,6 +88,33 @@ def plan_depth(
             rigid.
         TypeError: an array of another dtype.
         PlanningError: no table in the image, or nothing on it.
+        WeightsError: the network cannot be loaded.
+    """
+
+def plan_views(
+    depths: Sequence[npt.NDArray[np.float32]],
+    ks: Sequence[npt.NDArray[np.float64]],
+    world_from_cameras: Sequence[npt.NDArray[np.float64]],
+    *,
+    masks: Sequence[npt.NDArray[np.bool_] | None] | None = None,
+    model: str | None = None,
+    fuse: bool = False,
+    cem: bool = False,
+    hand_check: bool = True,
+    seed: int = 0,
+) -> dict[str, Any]:
+    """Plans a grasp over several depth images of one scene, as ``plan --views-dir`` does.
+
+    One float32 ``(H, W)`` depth image (metres), 3x3 camera matrix and 4x4 ``world_from_camera``
+    per view, in one world frame (with ``fuse``, its z up from the table); ``masks``: per view
+    the object's pixels or ``None``. The options are ``plan_depth``'s. Returns the content of
+    ``grasps.json`` (frame ``given``).
+
+    Raises:
+        ValueError: lists of different lengths, or a bad array (named, e.g. ``depths[2]``).
+        TypeError: an array of another dtype.
+        PlanningError: no table in a view, or nothing on it; with ``fuse``, a world whose z
+            is not up from the table.
         WeightsError: the network cannot be loaded.
     """
 
