@@ -6,7 +6,7 @@
 //! ```text
 //! cargo run --release --example plan_eval -- [--per-category 2] [--data ../shared/data/meshes]
 //!     [--camera phoxi_s|primesense|realsense_d435] [--top-down-only] [--shell] [--grip-surface] [--top10]
-//!     [--gqcnn EXPORT.json]
+//!     [--gqcnn EXPORT.json] [--mvgqcnn EXPORT.json]
 //! ```
 //!
 //! `--camera` renders every view with another camera's intrinsics: the planner scales its
@@ -87,6 +87,10 @@ struct Args {
     /// The top-down GQ-CNN's network from this export (`NAME.json`) instead of the shipped one.
     #[arg(long)]
     gqcnn: Option<PathBuf>,
+    /// The multi-view GQ-CNN's network from this export (`NAME.json`) instead of the shipped
+    /// one (a candidate measured before it ships).
+    #[arg(long)]
+    mvgqcnn: Option<PathBuf>,
     /// The policies (topdown, per-view, fused-3, fused-5, fused-10); all when none is given.
     #[arg(long = "policy")]
     policies: Vec<String>,
@@ -279,11 +283,17 @@ fn run(args: &Args) -> Result<(), String> {
             });
         }
         let gripper = params.labels.gripper().map_err(|e| e.to_string())?;
-        let load =
-            |model: ShippedModel| match (&args.gqcnn, model.name == models::GQCNN_TOPDOWN.name) {
-                (Some(path), true) => Gqcnn::load(path).map_err(|e| e.to_string()),
-                _ => model.load().map_err(|e| e.to_string()),
+        let load = |model: ShippedModel| {
+            let replacement = if model.name == models::GQCNN_TOPDOWN.name {
+                &args.gqcnn
+            } else {
+                &args.mvgqcnn
             };
+            match replacement {
+                Some(path) => Gqcnn::load(path).map_err(|e| e.to_string()),
+                None => model.load().map_err(|e| e.to_string()),
+            }
+        };
         let mut policy =
             GqcnnPolicy::new(load(p.model)?, gripper.max_opening_m).map_err(|e| e.to_string())?;
         policy.cem = args.cem.then(CemParams::default);

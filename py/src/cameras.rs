@@ -1,10 +1,16 @@
-//! Cameras: intrinsics files to Python.
+//! Cameras: intrinsics (files, presets), camera layouts on the hemisphere, and depth images to
+//! points. A camera crosses the binding as a dict `{k, width, height, world_from_camera}`: the
+//! 3x3 matrix, the image size and the 4x4 pose (OpenCV frame: x right, y down, z forward).
 
 use std::path::PathBuf;
 
-use mvgrasp_geometry::Intrinsics;
+use mvgrasp_geometry::{Camera, HemisphereLayout, Intrinsics, IntrinsicsPreset, Pose3, Vec3};
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2, PyReadonlyArrayDyn};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
 
+use crate::arrays::{intrinsics_of, k_array, pose_array, pose_of};
 use crate::convert::to_python;
 use crate::errors::camera_error;
 
@@ -15,4 +21,98 @@ use crate::errors::camera_error;
 pub(crate) fn load_intrinsics(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyAny>> {
     let intrinsics = Intrinsics::from_intr_file(&path).map_err(camera_error)?;
     to_python(py, &intrinsics)
+}
+
+/// The intrinsics of a preset (`phoxi_s`, the datasets' camera; `primesense`;
+/// `realsense_d435`), as `load_intrinsics` returns them. Raises `mvgrasp.CameraError` for
+/// another name.
+#[pyfunction]
+#[pyo3(signature = (name = "phoxi_s"))]
+pub(crate) fn intrinsics_preset<'py>(py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyAny>> {
+    let preset: IntrinsicsPreset = name.parse().map_err(camera_error)?;
+    to_python(py, &Intrinsics::preset(preset))
+}
+
+/// A camera as the dict the binding uses.
+fn camera_dict<'py>(py: Python<'py>, camera: &Camera) -> PyResult<Bound<'py, PyDict>> {
+    let dict = PyDict::new(py);
+    dict.set_item("k", k_array(py, &camera.intrinsics))?;
+    dict.set_item("width", camera.intrinsics.width)?;
+    dict.set_item("height", camera.intrinsics.height)?;
+    dict.set_item(
+        "world_from_camera",
+        pose_array(py, &camera.world_from_camera),
+    )?;
+    Ok(dict)
+}
+
+/// Cameras on a spherical cap above the table, looking at `target` (world, z up from the
+/// table), as the datasets place them: `count` views `radius_m` away, elevations stratified
+/// between `min_elevation_deg` and `max_elevation_deg` in equal-area bands, azimuths spread by
+/// the golden angle, both jittered from `seed`; the first exactly top-down when
+/// `include_top_down`. The defaults are the seed paper's 10 test views. Each camera is a dict
+/// `{k, width, height, world_from_camera}` (`intrinsics`: a preset's name). Raises
+/// `mvgrasp.CameraError` for a bad layout or preset.
+#[pyfunction]
+// pyo3 writes a tuple default as `...` in `__text_signature__`: the signature is spelled out.
+#[pyo3(
+    signature = (count = 10, radius_m = 0.5, min_elevation_deg = 15.0, max_elevation_deg = 85.0, include_top_down = true, target = (0.0, 0.0, 0.0), intrinsics = "phoxi_s", seed = 0),
+    text_signature = "(count=10, radius_m=0.5, min_elevation_deg=15.0, max_elevation_deg=85.0, include_top_down=True, target=(0.0, 0.0, 0.0), intrinsics='phoxi_s', seed=0)"
+)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn hemisphere_cameras<'py>(
+    py: Python<'py>,
+    count: usize,
+    radius_m: f32,
+    min_elevation_deg: f32,
+    max_elevation_deg: f32,
+    include_top_down: bool,
+    target: (f32, f32, f32),
+    intrinsics: &str,
+    seed: u64,
+) -> PyResult<Bound<'py, PyList>> {
+    let preset: IntrinsicsPreset = intrinsics.parse().map_err(camera_error)?;
+    let layout = HemisphereLayout {
+        count,
+        radius_m,
+        min_elevation_rad: min_elevation_deg.to_radians(),
+        max_elevation_rad: max_elevation_deg.to_radians(),
+        include_top_down,
+    };
+    let target = Vec3::new(target.0, target.1, target.2);
+    let cameras = layout
+        .cameras(Intrinsics::preset(preset), target, seed)
+        .map_err(camera_error)?;
+    let list = PyList::empty(py);
+    for camera in &cameras {
+        list.append(camera_dict(py, camera)?)?;
+    }
+    Ok(list)
+}
+
+/// The 3-D points of a depth image, one per valid pixel (z > 0 and finite) in row-major order,
+/// as an `(N, 3)` float32 array: in the camera frame, or in the world with `world_from_camera`.
+/// `depth`: float32 metres, `(H, W)` or `(H, W, 1)`; `k`: the 3x3 camera matrix.
+#[pyfunction]
+#[pyo3(signature = (depth, k, world_from_camera = None))]
+pub(crate) fn depth_to_points<'py>(
+    py: Python<'py>,
+    depth: PyReadonlyArrayDyn<'py, f32>,
+    k: PyReadonlyArray2<'py, f64>,
+    world_from_camera: Option<PyReadonlyArray2<'py, f64>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let (width, height, values) = crate::arrays::depth_of("depth", &depth)?;
+    let camera = Camera {
+        intrinsics: intrinsics_of("k", &k, width, height)?,
+        world_from_camera: match world_from_camera {
+            Some(pose) => pose_of("world_from_camera", &pose)?,
+            None => Pose3::IDENTITY,
+        },
+    };
+    let points = py
+        .detach(|| camera.depth_to_world_points(&values))
+        .map_err(|e| PyValueError::new_err(format!("depth: {e}")))?;
+    let n = points.len();
+    let flat: Vec<f32> = points.iter().flat_map(|p| p.to_array()).collect();
+    Ok(PyArray1::from_vec(py, flat).reshape([n, 3])?.into_any())
 }

@@ -8,13 +8,16 @@
 //! deprecated `extension-module` feature is therefore not used. The crate is not in the
 //! workspace's `default-members`, so a bare `cargo build` / `cargo test` needs no Python.
 
+mod arrays;
 mod cameras;
 mod convert;
 mod errors;
 mod grasp_dataset;
 mod mesh;
 mod networks;
+mod objects;
 mod planning;
+mod render;
 
 /// The native half of the `mvgrasp` package; import `mvgrasp`, not this module.
 #[pyo3::pymodule(name = "_native")]
@@ -22,7 +25,7 @@ mod native {
     use pyo3::prelude::*;
 
     #[pymodule_export]
-    use crate::cameras::load_intrinsics;
+    use crate::cameras::{depth_to_points, hemisphere_cameras, intrinsics_preset, load_intrinsics};
     #[pymodule_export]
     use crate::errors::{
         CameraError, DatasetError, MeshError, MvGraspError, PlanningError, RenderError,
@@ -38,7 +41,13 @@ mod native {
     #[pymodule_export]
     use crate::networks::load_network;
     #[pymodule_export]
+    use crate::objects::{
+        builtin_object, mass_properties, mesh_from_arrays, object_categories, stable_poses,
+    };
+    #[pymodule_export]
     use crate::planning::{plan_depth, plan_views};
+    #[pymodule_export]
+    use crate::render::{random_colors, render};
 
     #[pymodule_init]
     fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -3,13 +3,10 @@
 use std::path::PathBuf;
 
 use mvgrasp_geometry::{LoadOptions, load_mesh_with};
-use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 
+use crate::arrays::{MeshArrays, mesh_arrays};
 use crate::errors::mesh_error;
-
-/// The vertices and triangles of a mesh, as NumPy arrays.
-type MeshArrays<'py> = (Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<u32>>);
 
 /// Loads an OBJ, STL or URDF file as `(vertices, triangles)`.
 ///
@@ -28,13 +25,5 @@ pub(crate) fn load_mesh(py: Python<'_>, path: PathBuf, scale: f32) -> PyResult<M
         .detach(|| load_mesh_with(&path, &options))
         .map_err(mesh_error)?;
 
-    let vertices: Vec<f32> = mesh
-        .vertices()
-        .iter()
-        .flat_map(|v| [v.x, v.y, v.z])
-        .collect();
-    let triangles: Vec<u32> = mesh.triangles().iter().flatten().copied().collect();
-    let vertices = PyArray1::from_vec(py, vertices).reshape([mesh.vertices().len(), 3])?;
-    let triangles = PyArray1::from_vec(py, triangles).reshape([mesh.triangles().len(), 3])?;
-    Ok((vertices, triangles))
+    mesh_arrays(py, &mesh)
 }

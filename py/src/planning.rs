@@ -9,68 +9,15 @@ use mvgrasp::planner::{
     CemParams, DepthImage, FusionParams, GqcnnPolicy, Mask, PlanParams, SensorPlanParams, View,
     VirtualScorer, models, plan_on_view, plan_on_views,
 };
-use mvgrasp_geometry::{Camera, Intrinsics, Pose3, pose_from_rows};
+use mvgrasp_geometry::{Camera, Pose3};
 use mvgrasp_infer::Gqcnn;
 use numpy::{PyReadonlyArray2, PyReadonlyArrayDyn};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
+use crate::arrays::{depth_of, intrinsics_of, pose_of};
 use crate::convert::to_python;
 use crate::errors::{WeightsError, pipeline_error};
-
-/// A depth image's size and values: (H, W) or (H, W, 1) float32 metres; `name` names the
-/// argument in errors.
-fn depth_of(name: &str, depth: &PyReadonlyArrayDyn<'_, f32>) -> PyResult<(u32, u32, Vec<f32>)> {
-    let shape = depth.as_array().shape().to_vec();
-    let (height, width) = match shape[..] {
-        [h, w] | [h, w, 1] => (h, w),
-        _ => {
-            return Err(PyValueError::new_err(format!(
-                "{name}: shape {shape:?}, expected (H, W) or (H, W, 1)"
-            )));
-        }
-    };
-    let size =
-        |n: usize| u32::try_from(n).map_err(|e| PyValueError::new_err(format!("{name}: {e}")));
-    Ok((
-        size(width)?,
-        size(height)?,
-        depth.as_array().iter().copied().collect(),
-    ))
-}
-
-/// The intrinsics of a 3x3 camera matrix without skew, for a `width` x `height` image.
-fn intrinsics_of(
-    name: &str,
-    k: &PyReadonlyArray2<'_, f64>,
-    width: u32,
-    height: u32,
-) -> PyResult<Intrinsics> {
-    let k = k.as_array();
-    if k.shape() != [3, 3] {
-        return Err(PyValueError::new_err(format!(
-            "{name}: shape {:?}, expected (3, 3)",
-            k.shape()
-        )));
-    }
-    if k[[0, 1]] != 0.0 || k[[1, 0]] != 0.0 || [k[[2, 0]], k[[2, 1]], k[[2, 2]]] != [0.0, 0.0, 1.0]
-    {
-        return Err(PyValueError::new_err(format!(
-            "{name}: expected [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] (no skew)"
-        )));
-    }
-    Intrinsics::new(
-        k[[0, 0]] as f32,
-        k[[1, 1]] as f32,
-        k[[0, 2]] as f32,
-        k[[1, 2]] as f32,
-        width,
-        height,
-        0.1,
-        2.0,
-    )
-    .map_err(|e| PyValueError::new_err(format!("{name}: {e}")))
-}
 
 /// A mask's pixels, which must be the depth's size.
 fn mask_of(
@@ -87,19 +34,6 @@ fn mask_of(
         )));
     }
     Ok(m.iter().copied().collect())
-}
-
-/// A rigid 4x4 pose (rows).
-fn pose_of(name: &str, pose: &PyReadonlyArray2<'_, f64>) -> PyResult<Pose3> {
-    let p = pose.as_array();
-    if p.shape() != [4, 4] {
-        return Err(PyValueError::new_err(format!(
-            "{name}: shape {:?}, expected (4, 4)",
-            p.shape()
-        )));
-    }
-    let rows = std::array::from_fn(|i| std::array::from_fn(|j| p[[i, j]]));
-    pose_from_rows(rows).map_err(|e| PyValueError::new_err(format!("{name}: {e}")))
 }
 
 /// The network `model` names (a shipped one or an export's JSON); `None`: the planner's

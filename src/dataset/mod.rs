@@ -19,7 +19,9 @@ pub(crate) mod images;
 mod scene;
 
 pub use images::{DEPTH_PNG_UNITS_PER_M, write_depth_png, write_png8};
-pub use scene::{ColorMode, OBJECT_ID, PlacedObject, SceneData, TABLE_ID, name_hash, splitmix};
+pub use scene::{
+    ColorMode, OBJECT_ID, PlacedObject, SceneData, TABLE_HALF_SIDE_M, TABLE_ID, name_hash, splitmix,
+};
 
 use std::path::{Path, PathBuf};
 

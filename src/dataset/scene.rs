@@ -15,8 +15,8 @@ pub const OBJECT_ID: u8 = 1;
 pub const TABLE_ID: u8 = 2;
 /// The table's colour.
 const TABLE_RGB: [u8; 3] = [150, 150, 150];
-/// Half the table's side, metres.
-const TABLE_HALF_SIDE_M: f32 = 0.4;
+/// Half the side of the datasets' table square, metres.
+pub const TABLE_HALF_SIDE_M: f32 = 0.4;
 
 /// How an object's surface is coloured.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]

@@ -56,6 +56,132 @@ def load_intrinsics(path: str | os.PathLike[str]) -> dict[str, Any]:
             names the file.
     """
 
+def intrinsics_preset(name: str = "phoxi_s") -> dict[str, Any]:
+    """The intrinsics of a preset (``phoxi_s``, the datasets' camera; ``primesense``;
+    ``realsense_d435``), as :func:`load_intrinsics` returns them.
+
+    Raises:
+        CameraError: another name.
+    """
+
+def hemisphere_cameras(
+    count: int = 10,
+    radius_m: float = 0.5,
+    min_elevation_deg: float = 15.0,
+    max_elevation_deg: float = 85.0,
+    include_top_down: bool = True,
+    target: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    intrinsics: str = "phoxi_s",
+    seed: int = 0,
+) -> list[dict[str, Any]]:
+    """Cameras on a spherical cap above the table looking at ``target`` (world, z up from the
+    table), placed as the datasets place them: elevations stratified in equal-area bands,
+    azimuths spread by the golden angle, both jittered from ``seed``; the first exactly
+    top-down when ``include_top_down``. The defaults are the seed paper's 10 test views.
+
+    Each camera is a dict: ``k`` (3x3 float64), ``width``, ``height``, ``world_from_camera``
+    (4x4 float64, OpenCV frame: x right, y down, z forward).
+
+    Raises:
+        CameraError: a count of 0, a radius that is not positive, elevations outside 0 to 90
+            degrees or in the wrong order, an unknown preset.
+    """
+
+def depth_to_points(
+    depth: npt.NDArray[np.float32],
+    k: npt.NDArray[np.float64],
+    world_from_camera: npt.NDArray[np.float64] | None = None,
+) -> npt.NDArray[np.float32]:
+    """The 3-D points of a depth image, one per valid pixel (z > 0 and finite) in row-major
+    order, as an ``(N, 3)`` float32 array: camera frame, or world with ``world_from_camera``.
+
+    Raises:
+        ValueError: a bad shape or camera matrix, a pose that is not rigid.
+        TypeError: a depth image that is not float32.
+    """
+
+def object_categories() -> list[str]:
+    """The built-in object categories, in the library's order."""
+
+def builtin_object(
+    category: str = "mug", index: int = 0, seed: int = 0
+) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.uint32]]:
+    """The ``index``-th built-in object of ``category`` under the library ``seed``, as
+    ``(vertices, triangles)``: a closed mesh in metres resting on z = 0, the same one the CLI's
+    ``--object CATEGORY:INDEX`` and the datasets use.
+
+    Raises:
+        ValueError: an unknown category.
+    """
+
+def mesh_from_arrays(
+    vertices: npt.ArrayLike, triangles: npt.ArrayLike
+) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.uint32]]:
+    """Checks ``(vertices, triangles)`` as a mesh file is checked and returns them as float32
+    and uint32 arrays, zero-area triangles dropped. Any real and integer dtypes go in (a
+    ``trimesh.Trimesh``'s ``vertices`` and ``faces`` as they are).
+
+    Raises:
+        ValueError: a shape that is not ``(N, 3)``, a negative index.
+        MeshError: an index out of range, NaN/inf vertices, no usable triangles.
+    """
+
+def mass_properties(
+    vertices: npt.ArrayLike, triangles: npt.ArrayLike, density_kg_m3: float = 1000.0
+) -> dict[str, Any]:
+    """Volume, mass, centre of mass and inertia at ``density_kg_m3``: ``volume_m3``,
+    ``mass_kg``, ``center_of_mass`` (3,), ``inertia_kg_m2`` (3, 3) about the centre of mass,
+    ``watertight``, ``from_convex_hull`` (a mesh that is not watertight has no inside: its
+    convex hull's figures are given).
+
+    Raises:
+        ValueError: a density that is not finite and positive.
+        MeshError: a bad or flat mesh.
+    """
+
+def stable_poses(vertices: npt.ArrayLike, triangles: npt.ArrayLike) -> list[dict[str, Any]]:
+    """The poses a mesh rests in on a table, most probable first: ``probability``,
+    ``table_from_object`` (4x4), ``face_normal`` (3,), ``face_area_m2``, ``tipping_angle_rad``,
+    ``marginal`` (it rolls or topples at a touch) and ``offered`` (used by the planner and the
+    datasets; the CLI's ``--stable-pose K`` is the K-th offered pose).
+
+    Raises:
+        MeshError: a bad or flat mesh.
+    """
+
+def random_colors(seed: int, n: int) -> npt.NDArray[np.uint8]:
+    """``n`` random RGB colours from ``seed`` as an ``(n, 3)`` uint8 array: the colours the
+    datasets give a mesh (per vertex or per triangle, from the seeds in ``object.json``)."""
+
+def render(
+    vertices: npt.ArrayLike,
+    triangles: npt.ArrayLike,
+    ks: Sequence[npt.NDArray[np.float64]],
+    world_from_cameras: Sequence[npt.NDArray[np.float64]],
+    *,
+    width: int,
+    height: int,
+    world_from_object: npt.NDArray[np.float64] | None = None,
+    colors: npt.NDArray[np.uint8] | None = None,
+    per_face: bool = False,
+    table: bool = True,
+    backend: str = "auto",
+) -> dict[str, npt.NDArray[Any]]:
+    """Renders a mesh for a batch of cameras as the CLI's ``render`` does (the GIL released).
+
+    Returns ``rgb`` ``(V, H, W, 3)`` uint8, ``depth`` ``(V, H, W)`` float32 (z along the
+    optical axis, metres; 0 where nothing was drawn) and ``mask`` ``(V, H, W)`` uint8 (0
+    background, 1 object, 2 table). ``ks`` and ``world_from_cameras``: per view a 3x3 camera
+    matrix and a 4x4 pose (OpenCV frame). ``world_from_object``: where the mesh is (default:
+    where it is). ``colors``: ``(N, 3)`` per vertex, or ``(M, 3)`` per triangle with
+    ``per_face``; default one grey. ``table``: the datasets' 0.8 m grey square at z = 0.
+    ``backend``: ``auto``, ``vulkan`` or ``gl``.
+
+    Raises:
+        ValueError: a bad array (named), lists of different lengths, an unknown backend.
+        RenderError: no graphics adapter could be opened.
+    """
+
 def plan_depth(
     depth: npt.NDArray[np.float32],
     k: npt.NDArray[np.float64],

@@ -1,0 +1,148 @@
+//! Rendering: RGB, depth and mask of a mesh on the table for a batch of cameras, as NumPy
+//! arrays, with the renderer the CLI's `render` uses (one per backend, kept for the process).
+
+use std::sync::{Arc, Mutex, PoisonError};
+
+use mvgrasp::convert::render_view;
+use mvgrasp::dataset::{SceneData, TABLE_HALF_SIDE_M};
+use mvgrasp::render::{Backend, Colors, Renderer};
+use mvgrasp_geometry::{Camera, Pose3};
+use numpy::{AllowTypeChange, PyArray1, PyArrayLike2, PyArrayMethods, PyReadonlyArray2};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::arrays::{intrinsics_of, mesh_of, pose_of};
+use crate::errors::RenderError;
+
+/// The renderers opened so far, one per backend asked for.
+static RENDERERS: Mutex<Vec<(Backend, Arc<Renderer>)>> = Mutex::new(Vec::new());
+
+/// The renderer of `backend`, opened on first use.
+fn renderer(backend: Backend) -> Result<Arc<Renderer>, mvgrasp::render::RenderError> {
+    let mut renderers = RENDERERS.lock().unwrap_or_else(PoisonError::into_inner);
+    if let Some((_, r)) = renderers.iter().find(|(b, _)| *b == backend) {
+        return Ok(Arc::clone(r));
+    }
+    let r = Arc::new(Renderer::new(backend)?);
+    renderers.push((backend, Arc::clone(&r)));
+    Ok(r)
+}
+
+/// `n` random 8-bit RGB colours from `seed`, as an `(n, 3)` uint8 array: the colours the
+/// datasets give a mesh (per vertex or per triangle, from the seeds in `object.json`).
+#[pyfunction]
+pub(crate) fn random_colors(py: Python<'_>, seed: u64, n: usize) -> PyResult<Bound<'_, PyAny>> {
+    let flat: Vec<u8> = mvgrasp::render::random_colors(seed, n)
+        .into_iter()
+        .flatten()
+        .collect();
+    Ok(PyArray1::from_vec(py, flat).reshape([n, 3])?.into_any())
+}
+
+/// Renders a mesh for a batch of cameras, as the CLI's `render` does; a dict of `rgb`
+/// `(V, H, W, 3)` uint8, `depth` `(V, H, W)` float32 (z along the optical axis, metres; 0 where
+/// nothing was drawn) and `mask` `(V, H, W)` uint8 (0 background, 1 object, 2 table).
+///
+/// `vertices`, `triangles`: the mesh (any real and integer dtypes). `ks`, `world_from_cameras`:
+/// per view a 3x3 camera matrix and a 4x4 pose (OpenCV frame), all `width` x `height` pixels.
+/// `world_from_object`: where the mesh is (default: where it is). `colors`: uint8 `(N, 3)` per
+/// vertex, or `(M, 3)` per triangle with `per_face`; default one grey. `table`: the datasets'
+/// 0.8 m grey square at z = 0. `backend`: `auto`, `vulkan` or `gl` (see `MVGRASP_RENDER_BACKEND`).
+/// The GIL is released while rendering. Raises `ValueError` for bad arrays (named) and
+/// `mvgrasp.RenderError` when no graphics adapter opens.
+#[pyfunction]
+#[pyo3(signature = (vertices, triangles, ks, world_from_cameras, *, width, height, world_from_object = None, colors = None, per_face = false, table = true, backend = "auto"))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn render<'py>(
+    py: Python<'py>,
+    vertices: PyArrayLike2<'py, f32, AllowTypeChange>,
+    triangles: PyArrayLike2<'py, i64, AllowTypeChange>,
+    ks: Vec<PyReadonlyArray2<'py, f64>>,
+    world_from_cameras: Vec<PyReadonlyArray2<'py, f64>>,
+    width: u32,
+    height: u32,
+    world_from_object: Option<PyReadonlyArray2<'py, f64>>,
+    colors: Option<PyReadonlyArray2<'py, u8>>,
+    per_face: bool,
+    table: bool,
+    backend: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let mesh = mesh_of(&vertices, &triangles)?;
+    let backend = Backend::parse(backend).ok_or_else(|| {
+        PyValueError::new_err(format!(
+            "backend: {backend:?}, expected auto, vulkan, gl, metal or dx12"
+        ))
+    })?;
+    if ks.len() != world_from_cameras.len() {
+        return Err(PyValueError::new_err(format!(
+            "ks and world_from_cameras: one per view, got {} and {}",
+            ks.len(),
+            world_from_cameras.len()
+        )));
+    }
+    let mut cameras = Vec::with_capacity(ks.len());
+    for (i, (k, pose)) in ks.iter().zip(&world_from_cameras).enumerate() {
+        cameras.push(Camera {
+            intrinsics: intrinsics_of(&format!("ks[{i}]"), k, width, height)?,
+            world_from_camera: pose_of(&format!("world_from_cameras[{i}]"), pose)?,
+        });
+    }
+    let pose = match world_from_object {
+        Some(p) => pose_of("world_from_object", &p)?,
+        None => Pose3::IDENTITY,
+    };
+    let colors: Option<Vec<[u8; 3]>> = match colors {
+        None => None,
+        Some(c) => {
+            let c = c.as_array();
+            let (what, expected) = if per_face {
+                ("triangles", mesh.triangles().len())
+            } else {
+                ("vertices", mesh.vertices().len())
+            };
+            if c.shape() != [expected, 3] {
+                return Err(PyValueError::new_err(format!(
+                    "colors: shape {:?}, expected ({expected}, 3): one per {what} of the mesh{}",
+                    c.shape(),
+                    if per_face {
+                        " (per_face=True)"
+                    } else {
+                        " (per_face=False)"
+                    }
+                )));
+            }
+            Some(c.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect())
+        }
+    };
+
+    let frames = py
+        .detach(|| -> Result<_, mvgrasp::render::RenderError> {
+            let renderer = renderer(backend)?;
+            let data = SceneData::of_mesh(&mesh, &pose, TABLE_HALF_SIDE_M);
+            let colors = match &colors {
+                None => Colors::Uniform([200, 200, 200]),
+                Some(c) if per_face => Colors::PerFace(c),
+                Some(c) => Colors::PerVertex(c),
+            };
+            let scene = renderer.upload(&data.mesh_inputs(mesh.triangles(), colors, table))?;
+            let views: Vec<_> = cameras.iter().map(render_view).collect();
+            renderer.render(&scene, &views)
+        })
+        .map_err(|e| RenderError::new_err(e.to_string()))?;
+
+    let (v, h, w) = (frames.len(), height as usize, width as usize);
+    let mut rgb = Vec::with_capacity(v * h * w * 3);
+    let mut depth = Vec::with_capacity(v * h * w);
+    let mut mask = Vec::with_capacity(v * h * w);
+    for frame in frames {
+        rgb.extend_from_slice(&frame.rgb);
+        depth.extend_from_slice(&frame.depth_m);
+        mask.extend_from_slice(&frame.mask);
+    }
+    let dict = PyDict::new(py);
+    dict.set_item("rgb", PyArray1::from_vec(py, rgb).reshape([v, h, w, 3])?)?;
+    dict.set_item("depth", PyArray1::from_vec(py, depth).reshape([v, h, w])?)?;
+    dict.set_item("mask", PyArray1::from_vec(py, mask).reshape([v, h, w])?)?;
+    Ok(dict)
+}
