@@ -3,8 +3,11 @@
     python -m mvgrasp_training.evaluate MODEL.json DATASET [DATASET ...] [--held-out F --seed S]
 
 Prints, per dataset, the balanced accuracy, accuracy, precision and recall of the robust label
-(or with ``--label`` the physics label or both) at 0.5 as JSON, and precision and recall at the
-stricter thresholds a planner that takes only confident grasps uses (0.8, 0.9). With ``--held-out F --seed S`` only the objects a training
+(or with ``--label`` the physics label or both) at 0.5 as JSON, precision and recall at the
+stricter thresholds a planner that takes only confident grasps uses (0.8, 0.9), and what a
+planner that takes the top of each object's ranking gets: the precision of each object's
+top-1 and top-10 scored datapoints, averaged over the objects (``top1_precision``,
+``top10_precision``). With ``--held-out F --seed S`` only the objects a training
 config with ``val_fraction = F`` and ``seed = S`` holds out are scored (the validation objects of
 that run: a network trained with that config never saw them). The network takes what its pose stream takes from each datapoint: the grasp
 depth, and theta for a multi-view GQ-CNN; a top-down GQ-CNN applied to a multi-view dataset
@@ -17,6 +20,8 @@ import argparse
 import json
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from mvgrasp_training.config import LABELS
 from mvgrasp_training.export import load_gqcnn
@@ -47,8 +52,21 @@ def evaluate(
                 float((above & positive).sum() / above.sum()) if above.any() else float("nan")
             )
             result[f"recall_at_{threshold}"] = float((above & positive).sum() / max(positive.sum(), 1))
+        for k in (1, 10):
+            result[f"top{k}_precision"] = top_k_precision(prob, data.label, data.object_id, k)
         results[str(root)] = result
     return results
+
+
+def top_k_precision(prob: np.ndarray, label: np.ndarray, object_id: np.ndarray, k: int) -> float:
+    """The share of positives among each object's ``k`` best-scored datapoints (all of them for
+    an object with fewer), averaged over the objects; ties keep the datasets' order."""
+    shares = []
+    for obj in np.unique(object_id):
+        mine = np.flatnonzero(object_id == obj)
+        best = mine[np.argsort(-prob[mine], kind="stable")[:k]]
+        shares.append(float((label[best] == 1).mean()))
+    return float(np.mean(shares)) if shares else float("nan")
 
 
 def main(argv: list[str] | None = None) -> int:

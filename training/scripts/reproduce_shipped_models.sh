@@ -3,7 +3,7 @@
 # trained on (training/configs/datasets/), the two training runs (training/configs/), the
 # exports copied into models/ and the torch-parity fixtures of the Rust tests rewritten.
 #
-#   training/scripts/reproduce_shipped_models.sh            # about an hour on a 2-core CPU
+#   training/scripts/reproduce_shipped_models.sh            # about two hours on a 2-core CPU
 #   QUICK=1 training/scripts/reproduce_shipped_models.sh    # minutes: 1 object per category,
 #                                                           # 1 epoch, into a scratch folder;
 #                                                           # models/ is left alone
@@ -57,9 +57,16 @@ if [[ -d $shared/meshes && $quick != 1 ]]; then
     done
 fi
 
-for kind in topdown multiview; do
+# The datasets: the top-down one (20 objects per category, library seed 0) and the large
+# multi-view one (60 per category, library seed 1: no evaluation object among them).
+for kind in topdown multiview_large; do
     config=training/configs/datasets/$kind.toml
-    "$generator" --quiet --per-category "$per_category" --config "$config" --out "$data/$kind/train"
+    if [[ $kind == topdown ]]; then
+        objects=(--per-category "$per_category")
+    else
+        objects=(--per-category "$((per_category * 3))" --library-seed 1)
+    fi
+    "$generator" --quiet "${objects[@]}" --config "$config" --out "$data/$kind/train"
     if [[ ${#test_meshes[@]} -gt 0 ]]; then
         "$generator" --quiet --config "$config" "${test_meshes[@]}" --out "$data/$kind/test"
     fi
@@ -68,6 +75,7 @@ done
 # The training configs, with the dataset folder (and for QUICK=1 the epochs) of this run.
 for name in gqcnn_small_topdown gqcnn_small_multiview; do
     kind=${name#gqcnn_small_}
+    [[ $kind == multiview ]] && kind=multiview_large
     config=$runs/$name.toml
     mkdir -p "$runs"
     edits=(-e "s|^dataset_dir = .*|dataset_dir = \"$data/$kind/train\"|")

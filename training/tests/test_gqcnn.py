@@ -119,3 +119,17 @@ def test_evaluate_scores_an_export_on_a_dataset(tmp_path, monkeypatch) -> None:
     data.object_id[25:] = 1
     held = evaluate.evaluate(path, [tmp_path / "data"], held_out=(0.5, 0))[str(tmp_path / "data")]
     assert held["count"] == 25
+
+
+def test_top_k_precision_averages_each_objects_best() -> None:
+    from mvgrasp_training.evaluate import top_k_precision
+
+    prob = np.array([0.9, 0.8, 0.1, 0.7, 0.95, 0.2, 0.3])
+    label = np.array([1, 0, 1, 0, 0, 1, 1])
+    objects = np.array([0, 0, 0, 1, 1, 1, 1])
+    # Object 0's best (0.9) is positive, object 1's (0.95) is not.
+    assert top_k_precision(prob, label, objects, 1) == 0.5
+    # Top 2: object 0 has 1 of 2, object 1 has 0 of 2 (0.95, 0.7).
+    assert top_k_precision(prob, label, objects, 2) == 0.25
+    # More than an object has: all of its datapoints.
+    assert top_k_precision(prob, label, objects, 10) == (2 / 3 + 2 / 4) / 2
