@@ -212,7 +212,7 @@ fn bench_fused(args: &Args) -> Result<(), String> {
     )
     .map_err(|e| e.to_string())?;
     let keep = scorer.params.candidates_per_view;
-    policy.virtual_scorer = Some(Box::new(scorer));
+    policy.fuse_with(scorer);
     let fusion_params = FusionParams::default();
     let once = || -> Result<[f64; 4], String> {
         let t = Instant::now();

@@ -145,7 +145,7 @@ fn run_trials(args: &Args) -> Result<Vec<Trial>, String> {
         gripper.max_opening_m,
     )
     .map_err(|e| e.to_string())?;
-    policy.virtual_scorer = Some(Box::new(scorer));
+    policy.fuse_with(scorer);
     let mut trials = Vec::new();
     for category in Category::ALL {
         for index in args.first_index..args.first_index + args.per_category {

@@ -106,11 +106,12 @@ struct Args {
     /// Candidates re-scored per view.
     #[arg(long, default_value_t = 10)]
     rescore_candidates: usize,
-    /// Perturbed copies averaged into each re-score (0: the candidate alone).
-    #[arg(long, default_value_t = 8)]
-    perturbations: usize,
+    /// Perturbed copies averaged into each re-score (0: the candidate alone; default: the
+    /// planner's, `VirtualViewParams::perturbations`).
+    #[arg(long)]
+    perturbations: Option<usize>,
     /// Candidate grasp axes the multi-view GQ-CNN samples per view in the fused policies (each
-    /// at 3 depths; `plan`'s sampler default: 200).
+    /// at 3 depths; default: the planner's, `VirtualViewParams::grasps_per_view`).
     #[arg(long)]
     fused_grasps: Option<usize>,
     /// A second network scores the virtual views too (gqcnn or mvgqcnn): the re-score is the
@@ -306,7 +307,12 @@ fn run(args: &Args) -> Result<(), String> {
             let mut scorer = VirtualScorer::new(load(model)?, gripper.max_opening_m)
                 .map_err(|e| e.to_string())?;
             scorer.params.candidates_per_view = args.rescore_candidates;
-            scorer.params.perturbations = args.perturbations;
+            if let Some(n) = args.perturbations {
+                scorer.params.perturbations = n;
+            }
+            if let Some(n) = args.fused_grasps {
+                scorer.params.grasps_per_view = n;
+            }
             scorer.params.propose_top_down = !args.no_top_down_proposals;
             let second = match args.second_scorer.as_deref() {
                 None => None,
@@ -319,10 +325,7 @@ fn run(args: &Args) -> Result<(), String> {
                 }
             };
             scorer.set_second(second).map_err(|e| e.to_string())?;
-            if let Some(n) = args.fused_grasps {
-                policy.sampler.num_grasps = n;
-            }
-            policy.virtual_scorer = Some(Box::new(scorer));
+            policy.fuse_with(scorer);
         }
         prepared.push((params, gripper, policy));
     }

@@ -130,9 +130,8 @@ pub(crate) fn k_array<'py>(py: Python<'py>, k: &Intrinsics) -> Bound<'py, PyArra
         f64::from(k.cx),
         f64::from(k.cy),
     );
-    Array2::from_shape_vec((3, 3), vec![fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0])
-        .expect("9 values for a 3x3 matrix")
-        .into_pyarray(py)
+    let rows = [[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]];
+    Array2::from_shape_fn((3, 3), |(i, j)| rows[i][j]).into_pyarray(py)
 }
 
 /// A rigid 4x4 pose (rows).

@@ -64,7 +64,7 @@ fn planner(
     policy.cem = cem.then(CemParams::default);
     if fuse {
         let scorer = VirtualScorer::new(models::GQCNN_TOPDOWN.load()?, gripper.max_opening_m)?;
-        policy.virtual_scorer = Some(Box::new(scorer));
+        policy.fuse_with(scorer);
     }
     let params = SensorPlanParams {
         hand_check,

@@ -123,7 +123,7 @@ fn add_virtual_scorer(
 ) -> Result<(), String> {
     let net = models::GQCNN_TOPDOWN.load().map_err(|e| e.to_string())?;
     let scorer = VirtualScorer::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
-    policy.virtual_scorer = Some(Box::new(scorer));
+    policy.fuse_with(scorer);
     Ok(())
 }
 

@@ -171,6 +171,15 @@ pub struct GqcnnPolicy {
 }
 
 impl GqcnnPolicy {
+    /// Makes this policy the multi-view planner's proposer: `scorer` re-scores its candidates
+    /// on virtual views of the fused scene, and each view samples only
+    /// `scorer.params.grasps_per_view` grasp axes (the re-score, not this network's own, picks
+    /// the grasp; fewer proposals cost less and held as often on the development set).
+    pub fn fuse_with(&mut self, scorer: VirtualScorer) {
+        self.sampler.num_grasps = scorer.params.grasps_per_view;
+        self.virtual_scorer = Some(Box::new(scorer));
+    }
+
     /// A policy with the default sampler and crops, for a gripper opening `max_width_m`.
     ///
     /// # Errors

@@ -41,6 +41,9 @@ pub struct VirtualViewParams {
     pub front_tolerance_m: f32,
     /// The best this many candidates of each view (after the hand check) are re-scored.
     pub candidates_per_view: usize,
+    /// Grasp axes the proposing policy samples in each view (each at its sampler's depths)
+    /// once it is fused with this scorer ([`crate::GqcnnPolicy::fuse_with`]).
+    pub grasps_per_view: usize,
     /// Each candidate's score is the mean over itself and this many perturbed copies (0: its
     /// own score): a robust score that a lucky crop cannot win.
     pub perturbations: usize,
@@ -68,7 +71,11 @@ impl Default for VirtualViewParams {
             min_distance_m: 0.4,
             front_tolerance_m: 0.003,
             candidates_per_view: 10,
-            perturbations: 8,
+            // 70 axes and 4 perturbed copies: on the development set (plan_eval --first-index
+            // 50) they held as often as 200 and 8 (40 against 37 of 47) in 0.58 s an object
+            // instead of 0.95.
+            grasps_per_view: 70,
+            perturbations: 4,
             perturb_translation_m: 0.002,
             perturb_rotation_rad: 5f32.to_radians(),
             propose_top_down: true,
