@@ -39,7 +39,7 @@ mod native {
     #[pymodule_export]
     use crate::mesh::load_mesh;
     #[pymodule_export]
-    use crate::networks::load_network;
+    use crate::networks::{load_network, score_crops};
     #[pymodule_export]
     use crate::objects::{
         builtin_object, mass_properties, mesh_from_arrays, object_categories, stable_poses,

@@ -2,8 +2,6 @@
 //! the ranked grasps, as `plan --depth ... --json` and `plan --views-dir ... --json` print them
 //! (`grasps.json`).
 
-use std::path::Path;
-
 use mvgrasp::grasps_file::{GraspsFile, WorldFrame};
 use mvgrasp::planner::{
     CemParams, DepthImage, FusionParams, GqcnnPolicy, Mask, PlanParams, SensorPlanParams, View,
@@ -17,7 +15,8 @@ use pyo3::prelude::*;
 
 use crate::arrays::{depth_of, intrinsics_of, pose_of};
 use crate::convert::to_python;
-use crate::errors::{WeightsError, pipeline_error};
+use crate::errors::pipeline_error;
+use crate::networks::load_model;
 
 /// A mask's pixels, which must be the depth's size.
 fn mask_of(
@@ -39,16 +38,11 @@ fn mask_of(
 /// The network `model` names (a shipped one or an export's JSON); `None`: the planner's
 /// default, the multi-view GQ-CNN when fusing, else the top-down GQ-CNN.
 fn network(model: Option<&str>, fuse: bool) -> PyResult<Gqcnn> {
-    let model = model.unwrap_or(if fuse {
+    load_model(model.unwrap_or(if fuse {
         models::MVGQCNN.name
     } else {
         models::GQCNN_TOPDOWN.name
-    });
-    match models::shipped(model) {
-        Some(shipped) => shipped.load().map_err(|e| e.to_string()),
-        None => Gqcnn::load(Path::new(model)).map_err(|e| e.to_string()),
-    }
-    .map_err(|e| WeightsError::new_err(format!("{model}: {e}")))
+    }))
 }
 
 /// The policy and settings of `plan` with these options.

@@ -53,3 +53,37 @@ def test_a_broken_export_raises_weights_error_naming_the_file(tmp_path: Path) ->
     (tmp_path / "gqcnn_small_topdown.safetensors").unlink()
     with pytest.raises(mvgrasp.WeightsError, match="gqcnn_small_topdown.safetensors"):
         mvgrasp.load_network(json_path)
+
+
+@pytest.mark.parametrize("name", ["gqcnn_small_topdown", "gqcnn_small_multiview"])
+def test_scoring_crops_gives_torchs_logits(name: str) -> None:
+    """The parity fixture of each shipped network (torch's logits on 16 seeded crops, written
+    by training/scripts/make_parity_fixtures.py) scored from NumPy."""
+    import numpy as np
+    from safetensors.numpy import load_file
+
+    io = load_file(REPO_ROOT / "tests" / "fixtures" / "shipped" / f"{name}.io.safetensors")
+    depth, pose, expected = io["depth"], io["pose"], io["logits"]
+    logits = mvgrasp.score_crops(name, depth, pose, logits=True)
+    assert logits.shape == expected.shape == (len(depth), 2)
+    assert np.abs(logits - expected).max() < 1e-4
+    prob = mvgrasp.score_crops(name, depth[:, 0], pose)
+    softmax = np.exp(expected[:, 1]) / np.exp(expected).sum(axis=1)
+    assert prob.shape == (len(depth),) and np.abs(prob - softmax).max() < 1e-4
+    # The export's JSON scores as the shipped name does.
+    again = mvgrasp.score_crops(str(REPO_ROOT / "models" / f"{name}.json"), depth, pose)
+    assert np.array_equal(again, prob)
+
+
+def test_scoring_names_a_bad_batch() -> None:
+    import numpy as np
+
+    crops = np.zeros((4, 32, 32), dtype=np.float32)
+    with pytest.raises(ValueError, match=r"depth: shape \[4, 16, 16\]"):
+        mvgrasp.score_crops("gqcnn_small_topdown", crops[:, :16, :16], np.zeros(4, np.float32))
+    with pytest.raises(ValueError, match=r"pose: shape \[4\], expected \(4, 2\)"):
+        mvgrasp.score_crops("gqcnn_small_multiview", crops, np.zeros(4, np.float32))
+    with pytest.raises(TypeError):
+        mvgrasp.score_crops("gqcnn_small_topdown", crops.astype(np.float64), np.zeros(4, np.float32))
+    with pytest.raises(mvgrasp.WeightsError, match="no_such.json"):
+        mvgrasp.score_crops("no_such.json", crops, np.zeros(4, np.float32))

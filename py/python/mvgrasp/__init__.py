@@ -34,6 +34,7 @@ from mvgrasp._native import (
     plan_views,
     random_colors,
     render,
+    score_crops,
     stable_poses,
     write_grasp_manifest,
 )
@@ -64,6 +65,7 @@ __all__ = [
     "plan_views",
     "random_colors",
     "render",
+    "score_crops",
     "stable_poses",
     "write_grasp_manifest",
 ]

@@ -256,6 +256,29 @@ def load_network(path: str | os.PathLike[str]) -> dict[str, Any]:
             architecture; the message names the file.
     """
 
+def score_crops(
+    model: str,
+    depth: npt.NDArray[np.float32],
+    pose: npt.NDArray[np.float32],
+    *,
+    logits: bool = False,
+) -> npt.NDArray[np.float32]:
+    """Scores a batch of grasp crops with a GQ-CNN as the planner scores its candidates (the
+    GIL released).
+
+    ``model``: a shipped network's name (``gqcnn_small_topdown``, ``gqcnn_small_multiview``) or
+    an export's ``NAME.json``. ``depth``: float32 crops ``(N, S, S)`` or ``(N, 1, S, S)`` with
+    the network's crop side (metres, cut to its input contract). ``pose``: float32 ``(N, P)``
+    with its pose inputs (grasp depth, and theta for a multi-view GQ-CNN), or ``(N,)`` when
+    ``P`` is 1. Returns each grasp's probability of being robust, ``(N,)``, or with
+    ``logits`` the two logits (not robust, robust), ``(N, 2)``.
+
+    Raises:
+        ValueError: a shape the network does not take (named).
+        TypeError: arrays that are not float32.
+        WeightsError: the network cannot be loaded.
+    """
+
 def grasp_dataset_num_shards(
     config: str | None = None,
     meshes: list[str] | None = None,
