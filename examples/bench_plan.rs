@@ -206,11 +206,7 @@ fn bench_fused(args: &Args) -> Result<(), String> {
     let gripper = params.labels.gripper().map_err(|e| e.to_string())?;
     let net = models::MVGQCNN.load().map_err(|e| e.to_string())?;
     let mut policy = GqcnnPolicy::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
-    let scorer = VirtualScorer::new(
-        models::GQCNN_TOPDOWN.load().map_err(|e| e.to_string())?,
-        gripper.max_opening_m,
-    )
-    .map_err(|e| e.to_string())?;
+    let scorer = VirtualScorer::shipped(gripper.max_opening_m).map_err(|e| e.to_string())?;
     let keep = scorer.params.candidates_per_view;
     policy.fuse_with(scorer);
     let fusion_params = FusionParams::default();

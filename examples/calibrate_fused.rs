@@ -140,11 +140,7 @@ fn run_trials(args: &Args) -> Result<Vec<Trial>, String> {
     let gripper = params.labels.gripper().map_err(|e| e.to_string())?;
     let net = models::MVGQCNN.load().map_err(|e| e.to_string())?;
     let mut policy = GqcnnPolicy::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
-    let scorer = VirtualScorer::new(
-        models::GQCNN_TOPDOWN.load().map_err(|e| e.to_string())?,
-        gripper.max_opening_m,
-    )
-    .map_err(|e| e.to_string())?;
+    let scorer = VirtualScorer::shipped(gripper.max_opening_m).map_err(|e| e.to_string())?;
     policy.fuse_with(scorer);
     let mut trials = Vec::new();
     for category in Category::ALL {

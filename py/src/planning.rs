@@ -57,8 +57,7 @@ fn planner(
     let mut policy = GqcnnPolicy::new(net, gripper.max_opening_m)?;
     policy.cem = cem.then(CemParams::default);
     if fuse {
-        let scorer = VirtualScorer::new(models::GQCNN_TOPDOWN.load()?, gripper.max_opening_m)?;
-        policy.fuse_with(scorer);
+        policy.fuse_with(VirtualScorer::shipped(gripper.max_opening_m)?);
     }
     let params = SensorPlanParams {
         hand_check,

@@ -96,20 +96,16 @@ pub(crate) fn render<'py>(
         None => None,
         Some(c) => {
             let c = c.as_array();
-            let (what, expected) = if per_face {
-                ("triangles", mesh.triangles().len())
+            let (what, expected, flag) = if per_face {
+                ("triangle", mesh.triangles().len(), "True")
             } else {
-                ("vertices", mesh.vertices().len())
+                ("vertex", mesh.vertices().len(), "False")
             };
             if c.shape() != [expected, 3] {
                 return Err(PyValueError::new_err(format!(
-                    "colors: shape {:?}, expected ({expected}, 3): one per {what} of the mesh{}",
-                    c.shape(),
-                    if per_face {
-                        " (per_face=True)"
-                    } else {
-                        " (per_face=False)"
-                    }
+                    "colors: shape {:?}, expected ({expected}, 3): one per {what} of the mesh \
+                     (per_face={flag})",
+                    c.shape()
                 )));
             }
             Some(c.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect())

@@ -116,17 +116,6 @@ struct Args {
 /// Views the multi-view planner fuses unless told otherwise (the seed paper's setting).
 const FUSED_VIEWS: usize = 5;
 
-/// The multi-view planner's re-scoring: the top-down GQ-CNN on virtual views.
-fn add_virtual_scorer(
-    policy: &mut GqcnnPolicy,
-    gripper: &mvgrasp::grasp::Gripper,
-) -> Result<(), String> {
-    let net = models::GQCNN_TOPDOWN.load().map_err(|e| e.to_string())?;
-    let scorer = VirtualScorer::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
-    policy.fuse_with(scorer);
-    Ok(())
-}
-
 /// The network `--model` names, or the default for the planner.
 fn model_of(args: &Args) -> String {
     args.model.clone().unwrap_or_else(|| {
@@ -215,7 +204,7 @@ fn run(args: &Args) -> Result<bool, String> {
         // The views spread over the whole cap (the first top-down), not the first of ten.
         params.views.count = params.max_views;
         params.fusion = Some(FusionParams::default());
-        add_virtual_scorer(&mut policy, &gripper)?;
+        policy.fuse_with(VirtualScorer::shipped(gripper.max_opening_m).map_err(|e| e.to_string())?);
     }
     let backend = Backend::parse(&args.backend).ok_or_else(|| {
         format!(
@@ -309,7 +298,7 @@ fn sensor_setup(
         ..Default::default()
     };
     if args.fuse {
-        add_virtual_scorer(&mut policy, &gripper)?;
+        policy.fuse_with(VirtualScorer::shipped(gripper.max_opening_m).map_err(|e| e.to_string())?);
     }
     Ok((model_name, policy, gripper, params))
 }

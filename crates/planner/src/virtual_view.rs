@@ -217,6 +217,15 @@ impl VirtualScorer {
         })
     }
 
+    /// The multi-view planner's scorer (`plan --fuse`): the shipped top-down GQ-CNN
+    /// ([`crate::models::GQCNN_TOPDOWN`]) with the default parameters.
+    ///
+    /// # Errors
+    /// As [`VirtualScorer::new`].
+    pub fn shipped(max_width_m: f32) -> Result<Self> {
+        Self::new(crate::models::GQCNN_TOPDOWN.load()?, max_width_m)
+    }
+
     /// A second network that scores the same virtual crops, the score then being the geometric
     /// mean of the two (a candidate must please both); `None`: the scorer's network alone.
     ///
