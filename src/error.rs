@@ -139,6 +139,15 @@ pub enum Error {
         /// The shard's file.
         path: PathBuf,
     },
+    /// A shard file that cannot be read as one of the grasp dataset's (see
+    /// [`crate::grasp_dataset::read_shard`]).
+    #[error("{path}: not a readable grasp-dataset shard: {problem}")]
+    Shard {
+        /// What is wrong: the file unreadable, a column missing or of another type or shape.
+        problem: String,
+        /// The file.
+        path: PathBuf,
+    },
     /// A dataset with nothing to show.
     #[error("{path}: the dataset has no datapoint to preview")]
     EmptyDataset {
@@ -182,6 +191,7 @@ impl Error {
             | Self::ConfigValue { .. }
             | Self::Json { .. }
             | Self::Safetensors { .. }
+            | Self::Shard { .. }
             | Self::Format { .. }
             | Self::NoObjects
             | Self::DuplicateObject { .. }

@@ -79,6 +79,15 @@ pub(crate) fn camera_error(error: GeometryError) -> PyErr {
     CameraError::new_err(error.to_string())
 }
 
+/// Maps an error of a dataset function: as [`pipeline_error`], except that a file that cannot
+/// be read or written is a `DatasetError` too.
+pub(crate) fn dataset_error(error: Error) -> PyErr {
+    match error.kind() {
+        ErrorKind::Io => DatasetError::new_err(error.to_string()),
+        _ => pipeline_error(error),
+    }
+}
+
 /// Maps a pipeline error onto the tree by the Rust error's kind ([`Error::kind`]), always with
 /// its message; a geometry error as [`mesh_error`] does.
 pub(crate) fn pipeline_error(error: Error) -> PyErr {

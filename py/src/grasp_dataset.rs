@@ -5,14 +5,18 @@ use std::path::PathBuf;
 use mvgrasp::cli::LibraryArgs;
 use mvgrasp::dataset::ObjectSource;
 use mvgrasp::grasp_dataset::{
-    DatasetPlan, GraspDatasetConfig, generate, generate_shard, read_manifest,
+    DatasetPlan, GraspDatasetConfig, ShardColumn, generate, generate_shard, read_manifest,
+    read_shard,
 };
 use mvgrasp::render::{Backend, Renderer};
+use numpy::{Element, PyArray1, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use safetensors::Dtype;
 
 use crate::convert::to_python;
-use crate::errors::pipeline_error;
+use crate::errors::dataset_error;
 
 /// The plan of a dataset: its config (a TOML file, or the defaults) and objects (mesh files or
 /// folders, or the built-in library).
@@ -24,7 +28,7 @@ fn plan(
     library_seed: u64,
 ) -> PyResult<DatasetPlan> {
     let (sources, config) = inputs(config, meshes, per_category, categories, library_seed)?;
-    DatasetPlan::new(&sources, &config).map_err(pipeline_error)
+    DatasetPlan::new(&sources, &config).map_err(dataset_error)
 }
 
 /// The objects and the config of a dataset.
@@ -36,7 +40,7 @@ fn inputs(
     library_seed: u64,
 ) -> PyResult<(Vec<ObjectSource>, GraspDatasetConfig)> {
     let config = match config {
-        Some(path) => GraspDatasetConfig::from_file(&path).map_err(pipeline_error)?,
+        Some(path) => GraspDatasetConfig::from_file(&path).map_err(dataset_error)?,
         None => GraspDatasetConfig::default(),
     };
     let categories = categories
@@ -101,7 +105,7 @@ pub(crate) fn generate_grasp_shard<'py>(
         let renderer = Renderer::new(backend)?;
         generate_shard(&renderer, &plan, &out, shard)
     });
-    to_python(py, &record.map_err(pipeline_error)?)
+    to_python(py, &record.map_err(dataset_error)?)
 }
 
 /// Writes `out/dataset.json` from the shards finished there; the manifest.
@@ -119,7 +123,7 @@ pub(crate) fn write_grasp_manifest(
     let plan = plan(config, meshes, per_category, categories, library_seed)?;
     let manifest = py
         .detach(|| plan.write_manifest(&out))
-        .map_err(pipeline_error)?;
+        .map_err(dataset_error)?;
     to_python(py, &manifest)
 }
 
@@ -147,6 +151,56 @@ pub(crate) fn generate_grasp_dataset<'py>(
             generate(&renderer, &sources, &config, &out, false)?;
             read_manifest(&out)
         })
-        .map_err(pipeline_error)?;
+        .map_err(dataset_error)?;
+    to_python(py, &manifest)
+}
+
+/// Every column of the shard at `path` as a NumPy array (its dtype and shape, datapoints
+/// first), after checking it against the format (`mvgrasp::grasp_dataset::COLUMNS`).
+/// Raises `mvgrasp.DatasetError` naming the file and the fault.
+#[pyfunction]
+pub(crate) fn read_grasp_shard(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyDict>> {
+    let columns = py.detach(|| read_shard(&path)).map_err(dataset_error)?;
+    let out = PyDict::new(py);
+    for column in columns {
+        let array = match column.dtype {
+            Dtype::F32 => column_array(py, &column, f32::from_le_bytes)?,
+            Dtype::U8 => column_array(py, &column, u8::from_le_bytes)?,
+            Dtype::I8 => column_array(py, &column, i8::from_le_bytes)?,
+            Dtype::U32 => column_array(py, &column, u32::from_le_bytes)?,
+            Dtype::U64 => column_array(py, &column, u64::from_le_bytes)?,
+            other => {
+                return Err(PyValueError::new_err(format!(
+                    "{}: column {} of dtype {other:?}, which the format has none of",
+                    path.display(),
+                    column.name
+                )));
+            }
+        };
+        out.set_item(column.name, array)?;
+    }
+    Ok(out)
+}
+
+/// A column's little-endian elements as an array of its shape.
+fn column_array<'py, T: Element, const N: usize>(
+    py: Python<'py>,
+    column: &ShardColumn,
+    from_le_bytes: fn([u8; N]) -> T,
+) -> PyResult<Bound<'py, PyAny>> {
+    let values: Vec<T> = column
+        .data
+        .chunks_exact(N)
+        .map(|b| from_le_bytes(b.try_into().unwrap_or([0; N])))
+        .collect();
+    Ok(PyArray1::from_vec(py, values)
+        .reshape(column.shape.as_slice())?
+        .into_any())
+}
+
+/// Reads `dir/dataset.json` (checked to be a grasp-dataset manifest); its content.
+#[pyfunction]
+pub(crate) fn read_grasp_manifest(py: Python<'_>, dir: PathBuf) -> PyResult<Bound<'_, PyAny>> {
+    let manifest = read_manifest(&dir).map_err(dataset_error)?;
     to_python(py, &manifest)
 }

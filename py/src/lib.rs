@@ -34,7 +34,7 @@ mod native {
     #[pymodule_export]
     use crate::grasp_dataset::{
         generate_grasp_dataset, generate_grasp_shard, grasp_dataset_num_shards,
-        write_grasp_manifest,
+        read_grasp_manifest, read_grasp_shard, write_grasp_manifest,
     };
     #[pymodule_export]
     use crate::mesh::load_mesh;

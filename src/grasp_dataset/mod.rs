@@ -37,7 +37,7 @@ pub use config::{
     CameraDistribution, CropParams, GraspDatasetConfig, MultiViewCameras, NoiseParams,
     TopDownCameras,
 };
-pub use shard::{Counts, Datapoint, ShardRecord};
+pub use shard::{COLUMNS, Counts, Datapoint, ShardColumn, ShardRecord, read_shard};
 
 use std::path::Path;
 

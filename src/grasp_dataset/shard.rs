@@ -336,6 +336,13 @@ pub fn write_shard(
             bytes_f32(points.iter().flat_map(|p| flat4(&p.world_from_camera))),
         ),
     ];
+    debug_assert!(
+        columns
+            .iter()
+            .map(|(name, dtype, ..)| (*name, *dtype))
+            .eq(COLUMNS.iter().map(|(name, dtype, _)| (*name, *dtype))),
+        "the columns written are the format's"
+    );
     let shard_path = dir.join(shard_file(record.index));
     let views = columns
         .iter()
@@ -368,6 +375,97 @@ pub fn write_shard(
     write_atomically(&shard_path, &bytes)
 }
 
+/// Every column of a shard: name, dtype and the shape of one datapoint's entry (`0` stands for
+/// the crop side), in the order they are written; the module docs' table.
+pub const COLUMNS: [(&str, Dtype, &[usize]); 21] = [
+    ("depth_crops", Dtype::F32, &[0, 0]),
+    ("grasp_depth_m", Dtype::F32, &[]),
+    ("theta_rad", Dtype::F32, &[]),
+    ("angle_rad", Dtype::F32, &[]),
+    ("center_px", Dtype::F32, &[2]),
+    ("width_m", Dtype::F32, &[]),
+    ("robust_epsilon", Dtype::F32, &[]),
+    ("robust_label", Dtype::U8, &[]),
+    ("collision_free", Dtype::U8, &[]),
+    ("force_closure", Dtype::U8, &[]),
+    ("physics_stage", Dtype::I8, &[]),
+    ("physics", Dtype::I8, &[]),
+    ("physics_rate", Dtype::F32, &[]),
+    ("object_id", Dtype::U32, &[]),
+    ("stable_pose", Dtype::U32, &[]),
+    ("view", Dtype::U32, &[]),
+    ("grasp", Dtype::U32, &[]),
+    ("quality_seed", Dtype::U64, &[]),
+    ("object_from_gripper", Dtype::F32, &[4, 4]),
+    ("table_from_object", Dtype::F32, &[4, 4]),
+    ("world_from_camera", Dtype::F32, &[4, 4]),
+];
+
+/// One column of a shard read back: raw little-endian bytes with their dtype and shape.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShardColumn {
+    /// The column's name ([`COLUMNS`]).
+    pub name: &'static str,
+    /// Its element type.
+    pub dtype: Dtype,
+    /// Its shape, datapoints first.
+    pub shape: Vec<usize>,
+    /// Its elements, little-endian, row-major.
+    pub data: Vec<u8>,
+}
+
+/// Reads the shard at `path` and checks it against the format: every column of [`COLUMNS`]
+/// there, of its dtype, with one entry per datapoint of the shape the table gives (square
+/// crops). Returns the columns in [`COLUMNS`]' order; other tensors in the file are ignored.
+///
+/// # Errors
+/// [`Error::Shard`] naming the file and the fault (unreadable, not safetensors, a column
+/// missing, of another dtype or shape).
+pub fn read_shard(path: &Path) -> Result<Vec<ShardColumn>> {
+    let fault = |problem: String| Error::Shard {
+        problem,
+        path: path.to_path_buf(),
+    };
+    let bytes = std::fs::read(path).map_err(|e| fault(format!("cannot read it: {e}")))?;
+    let file = safetensors::SafeTensors::deserialize(&bytes)
+        .map_err(|e| fault(format!("not a safetensors file: {e}")))?;
+    let crops = file
+        .tensor("depth_crops")
+        .map_err(|_| fault("no tensor depth_crops".into()))?;
+    let (n, side) = match *crops.shape() {
+        [n, a, b] if a == b => (n, a),
+        ref shape => {
+            return Err(fault(format!(
+                "depth_crops has shape {shape:?}, expected (N, S, S)"
+            )));
+        }
+    };
+    COLUMNS
+        .iter()
+        .map(|&(name, dtype, entry)| {
+            let tensor = file
+                .tensor(name)
+                .map_err(|_| fault(format!("no tensor {name}")))?;
+            let shape: Vec<usize> = std::iter::once(n)
+                .chain(entry.iter().map(|&d| if d == 0 { side } else { d }))
+                .collect();
+            if tensor.dtype() != dtype || tensor.shape() != shape {
+                return Err(fault(format!(
+                    "{name} is {:?} {:?}, expected {dtype:?} {shape:?}",
+                    tensor.dtype(),
+                    tensor.shape()
+                )));
+            }
+            Ok(ShardColumn {
+                name,
+                dtype,
+                shape,
+                data: tensor.data().to_vec(),
+            })
+        })
+        .collect()
+}
+
 /// Writes `bytes` to `path` through `path.tmp` and a rename.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
     let mut tmp = path.as_os_str().to_owned();
@@ -384,4 +482,97 @@ pub fn finished_shard(dir: &Path, index: usize) -> Option<ShardRecord> {
     }
     let text = std::fs::read_to_string(sidecar_path(dir, index)).ok()?;
     serde_json::from_str(&text).ok()
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used)] // tests may fail loudly
+
+    use super::*;
+
+    fn datapoint(i: u32, crop_size: usize) -> Datapoint {
+        let pose = |offset: f32| {
+            [0, 1, 2, 3].map(|r| [0, 1, 2, 3].map(|c| (4 * r + c) as f32 + offset + i as f32))
+        };
+        Datapoint {
+            crop: (0..crop_size * crop_size).map(|j| j as f32 * 0.5).collect(),
+            grasp_depth_m: 0.6 + i as f32,
+            theta_rad: 1.0,
+            angle_rad: -0.5,
+            center_px: [10.0, 20.0 + i as f32],
+            width_m: 0.04,
+            robust_epsilon: 0.002,
+            robust_label: i.is_multiple_of(2),
+            collision_free: true,
+            force_closure: !i.is_multiple_of(2),
+            physics: -1,
+            physics_rate: -1.0,
+            physics_stage: 3,
+            object_id: 7,
+            stable_pose: 1,
+            view: i,
+            grasp: 2 * i,
+            quality_seed: u64::MAX - u64::from(i),
+            object_from_gripper: pose(0.0),
+            table_from_object: pose(100.0),
+            world_from_camera: pose(200.0),
+        }
+    }
+
+    #[test]
+    fn a_shard_reads_back_as_written_and_a_damaged_one_is_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let points = [datapoint(0, 3), datapoint(1, 3)];
+        let record = ShardRecord {
+            file: shard_file(4),
+            index: 4,
+            ..ShardRecord::default()
+        };
+        write_shard(dir.path(), &points, 3, &record).unwrap();
+        let path = dir.path().join(shard_file(4));
+        let columns = read_shard(&path).unwrap();
+        assert_eq!(columns.len(), COLUMNS.len());
+        let column = |name: &str| columns.iter().find(|c| c.name == name).unwrap();
+        assert_eq!(column("depth_crops").shape, [2, 3, 3]);
+        assert_eq!(
+            column("depth_crops").data[..8],
+            bytes_f32([0.0, 0.5].into_iter())
+        );
+        assert_eq!(column("object_from_gripper").shape, [2, 4, 4]);
+        assert_eq!(
+            column("quality_seed").data[8..],
+            (u64::MAX - 1).to_le_bytes()
+        );
+        assert_eq!(column("physics_stage").data, [3, 3]);
+        assert_eq!(column("robust_label").data, [1, 0]);
+        assert_eq!(
+            column("world_from_camera").data[64..68],
+            201.0f32.to_le_bytes()
+        );
+
+        // Cut short: the file and the fault named.
+        let bytes = std::fs::read(&path).unwrap();
+        let cut = dir.path().join("cut.safetensors");
+        std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+        let message = read_shard(&cut).unwrap_err().to_string();
+        assert!(message.contains("cut.safetensors") && message.contains("safetensors"));
+        // A column missing.
+        let one = safetensors::serialize(
+            [(
+                "depth_crops",
+                TensorView::new(Dtype::F32, vec![1, 1, 1], &[0u8; 4]).unwrap(),
+            )],
+            None,
+        )
+        .unwrap();
+        let partial = dir.path().join("partial.safetensors");
+        std::fs::write(&partial, one).unwrap();
+        let message = read_shard(&partial).unwrap_err().to_string();
+        assert!(
+            message.contains("partial.safetensors") && message.contains("no tensor grasp_depth_m"),
+            "{message}"
+        );
+        let missing = read_shard(&dir.path().join("none.safetensors")).unwrap_err();
+        assert!(matches!(missing, Error::Shard { .. }), "{missing}");
+    }
 }

@@ -35,6 +35,18 @@ def test_shards_read_with_the_counts_of_the_manifest(dataset: Path) -> None:
         assert (shard["object_id"] == record["objects"][0]).all()
 
 
+def test_the_wheel_reads_what_the_safetensors_library_reads(dataset: Path) -> None:
+    from safetensors.numpy import load_file
+
+    for record in GraspDataset.open(dataset).manifest["shards"]:
+        ours = read_shard(dataset / record["file"])
+        theirs = load_file(str(dataset / record["file"]))
+        assert set(ours) == set(theirs)
+        for name, array in theirs.items():
+            assert ours[name].dtype == array.dtype, name
+            assert np.array_equal(ours[name], array, equal_nan=True), name
+
+
 def test_bad_files_name_the_file(dataset: Path, tmp_path: Path) -> None:
     good = (dataset / "shard_00000.safetensors").read_bytes()
     cut = tmp_path / "cut.safetensors"

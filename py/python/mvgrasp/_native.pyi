@@ -321,3 +321,10 @@ def generate_grasp_dataset(
 ) -> dict[str, Any]:
     """Makes every unfinished shard and the manifest with the Rust generator's loop; the
     manifest."""
+
+def read_grasp_shard(path: str | os.PathLike[str]) -> dict[str, npt.NDArray[Any]]:
+    """Every column of a shard as a NumPy array (its dtype and shape, datapoints first), after
+    checking it against the format; ``DatasetError`` naming the file and the fault."""
+
+def read_grasp_manifest(dir: str | os.PathLike[str]) -> dict[str, Any]:
+    """The content of ``dir/dataset.json``, checked to be a grasp-dataset manifest."""

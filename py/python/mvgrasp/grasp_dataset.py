@@ -6,6 +6,9 @@ over processes or machines
 (:mod:`mvgrasp.ray_launcher`). Every shard depends only on the config and the object list, so
 any split of the shards writes the same bytes as one machine making them all.
 
+Reading a dataset back (:class:`GraspDataset`, :func:`read_shard`) goes through the same Rust
+code, which checks every column against the format.
+
 Objects are mesh files or folders (``meshes``), or, when ``meshes`` is None, the built-in
 library (``per_category`` objects of each of ``categories``, default all).
 """
@@ -13,8 +16,12 @@ library (``per_category`` objects of each of ``categories``, default all).
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Optional, Union
+
+import numpy as np
 
 from mvgrasp import _native
 
@@ -107,3 +114,33 @@ def generate(
         backend=backend,
         **objects_arguments(meshes, per_category, categories, library_seed),
     )
+
+
+def read_shard(path: PathLike) -> dict[str, np.ndarray]:
+    """Every column of the shard at ``path`` as a NumPy array (see the Rust docs of
+    ``mvgrasp::grasp_dataset::shard`` for the table); :class:`mvgrasp.DatasetError` naming the
+    file when it is not a readable shard of this format."""
+    return _native.read_grasp_shard(os.fspath(path))
+
+
+@dataclass(frozen=True)
+class GraspDataset:
+    """A grasp dataset folder: its manifest (``dataset.json``) and finished shards."""
+
+    root: Path
+    manifest: dict[str, Any]
+
+    @classmethod
+    def open(cls, root: PathLike) -> GraspDataset:
+        """Reads ``root/dataset.json``; :class:`mvgrasp.DatasetError` when it is missing or not
+        a grasp-dataset manifest."""
+        return cls(Path(root), _native.read_grasp_manifest(os.fspath(root)))
+
+    def shards(self) -> Iterator[dict[str, np.ndarray]]:
+        """The finished shards' columns, in index order."""
+        for record in self.manifest["shards"]:
+            yield read_shard(self.root / record["file"])
+
+    def object_ids(self) -> list[int]:
+        """The ids of the dataset's objects, in manifest order."""
+        return [o["id"] for o in self.manifest["objects"]]
