@@ -98,6 +98,16 @@ pub enum Error {
         /// The file.
         path: PathBuf,
     },
+    /// A planning option out of its range ([`crate::planner::PlanOptions`]).
+    #[error("plan option {name} = {value}: {expected}")]
+    PlanOption {
+        /// The option (`views`, `distance_m`).
+        name: &'static str,
+        /// Its value, printed.
+        value: String,
+        /// What would be valid.
+        expected: &'static str,
+    },
     /// A dataset asked of no objects.
     #[error("dataset: no objects to make a dataset of")]
     NoObjects,
@@ -184,7 +194,7 @@ impl Error {
             Self::Grasp(_) => ErrorKind::Grasp,
             Self::Render(_) => ErrorKind::Rendering,
             Self::Infer(_) => ErrorKind::Weights,
-            Self::Planning(_) => ErrorKind::Planning,
+            Self::Planning(_) | Self::PlanOption { .. } => ErrorKind::Planning,
             Self::Io { .. } | Self::Png { .. } => ErrorKind::Io,
             Self::ConfigFile { .. }
             | Self::Toml { .. }

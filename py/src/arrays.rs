@@ -158,3 +158,25 @@ pub(crate) fn pose_array<'py>(py: Python<'py>, pose: &Pose3) -> Bound<'py, PyArr
 pub(crate) fn vec3_array<'py>(py: Python<'py>, v: Vec3) -> Bound<'py, PyArray1<f64>> {
     PyArray1::from_vec(py, v.to_array().map(f64::from).to_vec())
 }
+
+/// One rigid 4x4 pose `(4, 4)` or a batch `(N, 4, 4)` (rows), as a list.
+pub(crate) fn poses_of(name: &str, poses: &PyReadonlyArrayDyn<'_, f64>) -> PyResult<Vec<Pose3>> {
+    let p = poses.as_array();
+    let batch = match p.shape() {
+        [4, 4] => 1,
+        [n, 4, 4] => *n,
+        shape => {
+            return Err(PyValueError::new_err(format!(
+                "{name}: shape {shape:?}, expected (4, 4) or (N, 4, 4)"
+            )));
+        }
+    };
+    let values: Vec<f64> = p.iter().copied().collect();
+    (0..batch)
+        .map(|i| {
+            let m = &values[16 * i..16 * i + 16];
+            let rows = std::array::from_fn(|r| std::array::from_fn(|c| m[4 * r + c]));
+            pose_from_rows(rows).map_err(|e| PyValueError::new_err(format!("{name}[{i}]: {e}")))
+        })
+        .collect()
+}

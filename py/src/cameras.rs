@@ -116,3 +116,92 @@ pub(crate) fn depth_to_points<'py>(
     let flat: Vec<f32> = points.iter().flat_map(|p| p.to_array()).collect();
     Ok(PyArray1::from_vec(py, flat).reshape([n, 3])?.into_any())
 }
+
+/// The camera of a 3x3 `k`, its image size and its pose (identity when `None`).
+fn camera_of(
+    k: &PyReadonlyArray2<'_, f64>,
+    width: u32,
+    height: u32,
+    world_from_camera: Option<&PyReadonlyArray2<'_, f64>>,
+) -> PyResult<Camera> {
+    Ok(Camera {
+        intrinsics: intrinsics_of("k", k, width, height)?,
+        world_from_camera: world_from_camera
+            .map(|p| pose_of("world_from_camera", p))
+            .transpose()?
+            .unwrap_or(Pose3::IDENTITY),
+    })
+}
+
+/// The `(N, 2)` pixels (u right, v down) where world points `(N, 3)` project through the
+/// camera (`k`, image size, pose); NaN for a point behind it.
+#[pyfunction]
+#[pyo3(signature = (points, k, width, height, world_from_camera = None))]
+pub(crate) fn project_points<'py>(
+    py: Python<'py>,
+    points: PyReadonlyArray2<'py, f64>,
+    k: PyReadonlyArray2<'py, f64>,
+    width: u32,
+    height: u32,
+    world_from_camera: Option<PyReadonlyArray2<'py, f64>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let camera = camera_of(&k, width, height, world_from_camera.as_ref())?;
+    let p = points.as_array();
+    if p.ncols() != 3 {
+        return Err(PyValueError::new_err(format!(
+            "points: shape {:?}, expected (N, 3)",
+            p.shape()
+        )));
+    }
+    let pixels: Vec<f64> = p
+        .rows()
+        .into_iter()
+        .flat_map(|r| {
+            let point = Vec3::new(r[0] as f32, r[1] as f32, r[2] as f32);
+            camera
+                .project(point)
+                .map_or([f64::NAN; 2], |px| px.map(f64::from))
+        })
+        .collect();
+    Ok(PyArray1::from_vec(py, pixels)
+        .reshape([p.nrows(), 2])?
+        .into_any())
+}
+
+/// The `(N, 3)` world points at pixels `(N, 2)` and depths `(N,)` (metres along the optical
+/// axis) of the camera (`k`, image size, pose).
+#[pyfunction]
+#[pyo3(signature = (pixels, depths, k, width, height, world_from_camera = None))]
+pub(crate) fn unproject_pixels<'py>(
+    py: Python<'py>,
+    pixels: PyReadonlyArray2<'py, f64>,
+    depths: PyReadonlyArrayDyn<'py, f64>,
+    k: PyReadonlyArray2<'py, f64>,
+    width: u32,
+    height: u32,
+    world_from_camera: Option<PyReadonlyArray2<'py, f64>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let camera = camera_of(&k, width, height, world_from_camera.as_ref())?;
+    let (px, d) = (pixels.as_array(), depths.as_array());
+    if px.ncols() != 2 || d.shape() != [px.nrows()] {
+        return Err(PyValueError::new_err(format!(
+            "pixels {:?} and depths {:?}: expected (N, 2) and (N,)",
+            px.shape(),
+            d.shape()
+        )));
+    }
+    let points: Vec<f64> = px
+        .rows()
+        .into_iter()
+        .zip(d.iter())
+        .flat_map(|(r, &depth)| {
+            camera
+                .unproject(r[0] as f32, r[1] as f32, depth as f32)
+                .to_array()
+                .map(f64::from)
+        })
+        .collect();
+    Ok(PyArray1::from_vec(py, points)
+        .reshape([px.nrows(), 3])?
+        .into_any())
+}

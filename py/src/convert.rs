@@ -1,9 +1,11 @@
 //! Conversions of Rust values to Python objects.
 
 use pyo3::IntoPyObjectExt;
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use serde::Serialize;
+use serde::de::DeserializeOwned;
 use serde_json::Value;
 
 /// A serialisable Rust value (a shard record, a manifest) as Python dicts, lists, strings and
@@ -42,4 +44,65 @@ fn json_to_python<'py>(py: Python<'py>, value: &Value) -> PyResult<Bound<'py, Py
             Ok(dict.into_any())
         }
     }
+}
+
+/// `defaults` with the fields of a Python dict put over them (nested dicts merged into nested
+/// structs), for settings given as `params={...}`. Raises `ValueError` naming `name` and the
+/// key for a key the settings do not have, a value of the wrong type, or a non-dict.
+pub(crate) fn from_python<T: Serialize + DeserializeOwned>(
+    name: &str,
+    value: &Bound<'_, PyAny>,
+    defaults: &T,
+) -> PyResult<T> {
+    let py = value.py();
+    let text: String = py
+        .import("json")?
+        .call_method1("dumps", (value,))
+        .map_err(|e| PyValueError::new_err(format!("{name}: not JSON-like: {e}")))?
+        .extract()?;
+    let given: Value =
+        serde_json::from_str(&text).map_err(|e| PyValueError::new_err(format!("{name}: {e}")))?;
+    let mut merged =
+        serde_json::to_value(defaults).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    merge(name, &mut merged, given)?;
+    serde_json::from_value(merged).map_err(|e| PyValueError::new_err(format!("{name}: {e}")))
+}
+
+/// Puts `given`'s keys over `base`'s, recursively; every key must be one `base` has.
+fn merge(path: &str, base: &mut Value, given: Value) -> PyResult<()> {
+    let (Value::Object(base), Value::Object(given)) = (&mut *base, &given) else {
+        if given.is_object() {
+            return Err(PyValueError::new_err(format!(
+                "{path}: a dict where a value is expected"
+            )));
+        }
+        if base.is_object() {
+            return Err(PyValueError::new_err(format!(
+                "{path}: expected a dict of settings"
+            )));
+        }
+        *base = given;
+        return Ok(());
+    };
+    for (key, value) in given.clone() {
+        let Some(slot) = base.get_mut(&key) else {
+            let mut known: Vec<&String> = base.keys().collect();
+            known.sort();
+            return Err(PyValueError::new_err(format!(
+                "{path}: unknown key {key:?} (known: {})",
+                known
+                    .iter()
+                    .map(|k| k.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )));
+        };
+        if slot.is_null() {
+            // An optional setting that is off by default: take the value as given.
+            *slot = value;
+        } else {
+            merge(&format!("{path}.{key}"), slot, value)?;
+        }
+    }
+    Ok(())
 }

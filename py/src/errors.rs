@@ -8,6 +8,7 @@
 //!     ├── mvgrasp.WeightsError   a network's weights are missing or do not match
 //!     ├── mvgrasp.RenderError    no graphics adapter, or rendering failed
 //!     ├── mvgrasp.PlanningError  depth images, views or a network the planner cannot use
+//!     ├── mvgrasp.GraspError     a gripper file the grasp analysis cannot use
 //!     └── mvgrasp.DatasetError   a dataset's config, folder, shards or manifest
 //! ```
 //!
@@ -15,6 +16,7 @@
 //! `Display` text, which names the file and the fault. A bad argument value (not a bad file)
 //! raises Python's own `ValueError`.
 
+use mvgrasp::grasp::GraspError as RustGraspError;
 use mvgrasp::{Error, ErrorKind};
 use mvgrasp_geometry::GeometryError;
 use pyo3::PyErr;
@@ -60,6 +62,12 @@ create_exception!(
 );
 create_exception!(
     mvgrasp,
+    GraspError,
+    MvGraspError,
+    "A gripper file (or an object) that the grasp analysis cannot use; the message names the file."
+);
+create_exception!(
+    mvgrasp,
     DatasetError,
     MvGraspError,
     "A dataset's config, folder, shards or manifest cannot be used; the message names the file."
@@ -79,6 +87,15 @@ pub(crate) fn camera_error(error: GeometryError) -> PyErr {
     CameraError::new_err(error.to_string())
 }
 
+/// Maps an error of the grasp analysis: a bad argument value is a `ValueError`, a gripper file
+/// or an object it cannot use a `GraspError`.
+pub(crate) fn grasp_error(error: RustGraspError) -> PyErr {
+    match error {
+        RustGraspError::InvalidParameter { .. } => PyValueError::new_err(error.to_string()),
+        _ => GraspError::new_err(error.to_string()),
+    }
+}
+
 /// Maps an error of a dataset function: as [`pipeline_error`], except that a file that cannot
 /// be read or written is a `DatasetError` too.
 pub(crate) fn dataset_error(error: Error) -> PyErr {
@@ -94,12 +111,13 @@ pub(crate) fn pipeline_error(error: Error) -> PyErr {
     let message = error.to_string();
     match (error.kind(), error) {
         (_, Error::Geometry(e)) => mesh_error(e),
+        (_, Error::Grasp(e)) => grasp_error(e),
+        (_, Error::PlanOption { .. }) => PyValueError::new_err(message),
         (ErrorKind::Rendering, _) => RenderError::new_err(message),
         (ErrorKind::Weights, _) => WeightsError::new_err(message),
         (ErrorKind::Planning, _) => PlanningError::new_err(message),
         (ErrorKind::Dataset, _) => DatasetError::new_err(message),
-        (ErrorKind::Geometry | ErrorKind::Grasp | ErrorKind::Io, _) => {
-            MvGraspError::new_err(message)
-        }
+        (ErrorKind::Grasp, _) => GraspError::new_err(message),
+        (ErrorKind::Geometry | ErrorKind::Io, _) => MvGraspError::new_err(message),
     }
 }

@@ -8,7 +8,7 @@ use mvgrasp::grasp_dataset::{
     DatasetPlan, GraspDatasetConfig, ShardColumn, generate, generate_shard, read_manifest,
     read_shard,
 };
-use mvgrasp::render::{Backend, Renderer};
+use mvgrasp::render::Renderer;
 use numpy::{Element, PyArray1, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -17,6 +17,7 @@ use safetensors::Dtype;
 
 use crate::convert::to_python;
 use crate::errors::dataset_error;
+use crate::render::backend_of;
 
 /// The plan of a dataset: its config (a TOML file, or the defaults) and objects (mesh files or
 /// folders, or the built-in library).
@@ -58,14 +59,6 @@ fn inputs(
     Ok((sources, config))
 }
 
-fn renderer_backend(backend: &str) -> PyResult<Backend> {
-    Backend::parse(backend).ok_or_else(|| {
-        PyValueError::new_err(format!(
-            "unknown backend {backend:?} (expected auto, vulkan, gl, metal, dx12)"
-        ))
-    })
-}
-
 /// How many shards the dataset has.
 #[pyfunction]
 #[pyo3(signature = (config = None, meshes = None, per_category = 1, categories = None, library_seed = 0))]
@@ -95,7 +88,7 @@ pub(crate) fn generate_grasp_shard<'py>(
     backend: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
     let plan = plan(config, meshes, per_category, categories, library_seed)?;
-    let backend = renderer_backend(backend)?;
+    let backend = backend_of(backend)?;
     let record = py.detach(|| -> mvgrasp::Result<_> {
         std::fs::create_dir_all(&out).map_err(|source| mvgrasp::Error::Io {
             op: "create",
@@ -144,7 +137,7 @@ pub(crate) fn generate_grasp_dataset<'py>(
     backend: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
     let (sources, config) = inputs(config, meshes, per_category, categories, library_seed)?;
-    let backend = renderer_backend(backend)?;
+    let backend = backend_of(backend)?;
     let manifest = py
         .detach(|| -> mvgrasp::Result<_> {
             let renderer = Renderer::new(backend)?;

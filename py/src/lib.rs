@@ -13,6 +13,7 @@ mod cameras;
 mod convert;
 mod errors;
 mod grasp_dataset;
+mod grasps;
 mod mesh;
 mod networks;
 mod objects;
@@ -25,16 +26,23 @@ mod native {
     use pyo3::prelude::*;
 
     #[pymodule_export]
-    use crate::cameras::{depth_to_points, hemisphere_cameras, intrinsics_preset, load_intrinsics};
+    use crate::cameras::{
+        depth_to_points, hemisphere_cameras, intrinsics_preset, load_intrinsics, project_points,
+        unproject_pixels,
+    };
     #[pymodule_export]
     use crate::errors::{
-        CameraError, DatasetError, MeshError, MvGraspError, PlanningError, RenderError,
+        CameraError, DatasetError, GraspError, MeshError, MvGraspError, PlanningError, RenderError,
         WeightsError,
     };
     #[pymodule_export]
     use crate::grasp_dataset::{
         generate_grasp_dataset, generate_grasp_shard, grasp_dataset_num_shards,
         read_grasp_manifest, read_grasp_shard, write_grasp_manifest,
+    };
+    #[pymodule_export]
+    use crate::grasps::{
+        check_collision, grasp_quality, gripper, physics_trial, robust_quality, sample_grasps,
     };
     #[pymodule_export]
     use crate::mesh::load_mesh;
@@ -45,7 +53,7 @@ mod native {
         builtin_object, mass_properties, mesh_from_arrays, object_categories, stable_poses,
     };
     #[pymodule_export]
-    use crate::planning::{plan_depth, plan_views};
+    use crate::planning::{plan_depth, plan_mesh, plan_views};
     #[pymodule_export]
     use crate::render::{random_colors, render};
 

@@ -4,19 +4,20 @@
 
 use mvgrasp::grasps_file::{GraspsFile, WorldFrame};
 use mvgrasp::planner::{
-    CemParams, DepthImage, FusionParams, GqcnnPolicy, Mask, PlanParams, SensorPlanParams, View,
-    VirtualScorer, models, plan_on_view, plan_on_views,
+    DepthImage, Mask, PlanOptions, View, plan_grasp, plan_on_view, plan_on_views,
 };
 use mvgrasp_geometry::{Camera, Pose3};
 use mvgrasp_infer::Gqcnn;
-use numpy::{PyReadonlyArray2, PyReadonlyArrayDyn};
+use numpy::{AllowTypeChange, PyArrayLike2, PyReadonlyArray2, PyReadonlyArrayDyn};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use pyo3::types::PyString;
 
-use crate::arrays::{depth_of, intrinsics_of, pose_of};
+use crate::arrays::{depth_of, intrinsics_of, mesh_of, pose_of};
 use crate::convert::to_python;
-use crate::errors::pipeline_error;
+use crate::errors::{camera_error, pipeline_error};
 use crate::networks::load_model;
+use crate::render::{backend_of, renderer};
 
 /// A mask's pixels, which must be the depth's size.
 fn mask_of(
@@ -35,41 +36,40 @@ fn mask_of(
     Ok(m.iter().copied().collect())
 }
 
-/// The network `model` names (a shipped one or an export's JSON); `None`: the planner's
-/// default, the multi-view GQ-CNN when fusing, else the top-down GQ-CNN.
-fn network(model: Option<&str>, fuse: bool) -> PyResult<Gqcnn> {
-    load_model(model.unwrap_or(if fuse {
-        models::MVGQCNN.name
+/// `grasps.json`'s content as a dict, or with `as_json` its text, byte for byte what `plan
+/// --out` writes.
+fn grasps_output<'py>(
+    py: Python<'py>,
+    file: &GraspsFile,
+    as_json: bool,
+) -> PyResult<Bound<'py, PyAny>> {
+    if as_json {
+        let text = file.to_json().map_err(pipeline_error)?;
+        Ok(PyString::new(py, &text).into_any())
     } else {
-        models::GQCNN_TOPDOWN.name
-    }))
+        to_python(py, file)
+    }
 }
 
-/// The policy and settings of `plan` with these options.
-fn planner(
-    net: Gqcnn,
-    fuse: bool,
-    cem: bool,
-    hand_check: bool,
-    seed: u64,
-) -> mvgrasp::Result<(GqcnnPolicy, mvgrasp::grasp::Gripper, SensorPlanParams)> {
-    let gripper = PlanParams::default().labels.gripper()?;
-    let mut policy = GqcnnPolicy::new(net, gripper.max_opening_m)?;
-    policy.cem = cem.then(CemParams::default);
-    if fuse {
-        policy.fuse_with(VirtualScorer::shipped(gripper.max_opening_m)?);
-    }
-    let params = SensorPlanParams {
+/// The options every kind of plan shares.
+fn options(fuse: bool, cem: bool, hand_check: bool, seed: u64) -> PlanOptions {
+    PlanOptions {
+        fuse,
+        cem,
         hand_check,
         seed,
-        fusion: fuse.then(FusionParams::default),
-        ..Default::default()
-    };
-    Ok((policy, gripper, params))
+        ..PlanOptions::default()
+    }
+}
+
+/// The network `model` names (a shipped one or an export's JSON); `None`: the default of
+/// `options`.
+fn network(model: Option<&str>, options: &PlanOptions) -> PyResult<Gqcnn> {
+    load_model(model.unwrap_or(options.default_model()))
 }
 
 /// Plans a grasp on one depth image, as `plan --depth` does, and returns the content of
-/// `grasps.json` (format `mvgrasp-grasps/1`) as a dict.
+/// `grasps.json` (format `mvgrasp-grasps/1`) as a dict (with `as_json`, the file's text).
 ///
 /// `depth`: float32 metres, shape (H, W) or (H, W, 1); NaN, infinities and 0 are missing.
 /// `k`: the 3x3 camera matrix (no skew). `mask`: bool (H, W), the object's pixels.
@@ -80,7 +80,7 @@ fn planner(
 /// when there is no table or nothing on it, `mvgrasp.WeightsError` for a network that cannot be
 /// loaded.
 #[pyfunction]
-#[pyo3(signature = (depth, k, *, mask = None, world_from_camera = None, model = None, fuse = false, cem = false, hand_check = true, seed = 0))]
+#[pyo3(signature = (depth, k, *, mask = None, world_from_camera = None, model = None, fuse = false, cem = false, hand_check = true, seed = 0, as_json = false))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn plan_depth<'py>(
     py: Python<'py>,
@@ -93,6 +93,7 @@ pub(crate) fn plan_depth<'py>(
     cem: bool,
     hand_check: bool,
     seed: u64,
+    as_json: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let (w, h, values) = depth_of("depth", &depth)?;
     let intrinsics = intrinsics_of("k", &k, w, h)?;
@@ -100,9 +101,10 @@ pub(crate) fn plan_depth<'py>(
     let pose = world_from_camera
         .map(|p| pose_of("world_from_camera", &p))
         .transpose()?;
-    let net = network(model, fuse)?;
+    let options = options(fuse, cem, hand_check, seed);
+    let net = network(model, &options)?;
     let file = py.detach(|| -> mvgrasp::Result<GraspsFile> {
-        let (policy, gripper, params) = planner(net, fuse, cem, hand_check, seed)?;
+        let (policy, gripper, params) = options.on_depth(net)?;
         let camera = Camera {
             intrinsics,
             world_from_camera: pose.unwrap_or(Pose3::IDENTITY),
@@ -125,11 +127,12 @@ pub(crate) fn plan_depth<'py>(
             Some(report.table),
         ))
     });
-    to_python(py, &file.map_err(pipeline_error)?)
+    grasps_output(py, &file.map_err(pipeline_error)?, as_json)
 }
 
 /// Plans a grasp over several depth images of one scene, as `plan --views-dir` does, and
-/// returns the content of `grasps.json` as a dict (its frame: the cameras' given one).
+/// returns the content of `grasps.json` as a dict (its frame: the cameras' given one; with
+/// `as_json`, the file's text).
 ///
 /// `depths`: one float32 (H, W) image per view (metres); `ks`: their 3x3 camera matrices;
 /// `world_from_cameras`: their 4x4 poses in one world frame (with `fuse`, its z up from the
@@ -137,7 +140,7 @@ pub(crate) fn plan_depth<'py>(
 /// `plan_depth`'s. Raises `ValueError` when the lists' lengths differ or for a bad array (the
 /// message names it, e.g. `depths[2]`), and `plan_depth`'s errors.
 #[pyfunction]
-#[pyo3(signature = (depths, ks, world_from_cameras, *, masks = None, model = None, fuse = false, cem = false, hand_check = true, seed = 0))]
+#[pyo3(signature = (depths, ks, world_from_cameras, *, masks = None, model = None, fuse = false, cem = false, hand_check = true, seed = 0, as_json = false))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn plan_views<'py>(
     py: Python<'py>,
@@ -150,6 +153,7 @@ pub(crate) fn plan_views<'py>(
     cem: bool,
     hand_check: bool,
     seed: u64,
+    as_json: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let n = depths.len();
     if n == 0
@@ -177,9 +181,10 @@ pub(crate) fn plan_views<'py>(
         };
         inputs.push((intrinsics, values, pose, mask));
     }
-    let net = network(model, fuse)?;
+    let options = options(fuse, cem, hand_check, seed);
+    let net = network(model, &options)?;
     let file = py.detach(|| -> mvgrasp::Result<GraspsFile> {
-        let (policy, gripper, params) = planner(net, fuse, cem, hand_check, seed)?;
+        let (policy, gripper, params) = options.on_depth(net)?;
         let mut views = Vec::with_capacity(n);
         for (i, (intrinsics, values, pose, mask)) in inputs.into_iter().enumerate() {
             let camera = Camera {
@@ -202,5 +207,66 @@ pub(crate) fn plan_views<'py>(
             report.tables.first().copied(),
         ))
     });
-    to_python(py, &file.map_err(pipeline_error)?)
+    grasps_output(py, &file.map_err(pipeline_error)?, as_json)
+}
+
+/// Plans a grasp on a mesh, as `plan --mesh` does: the object rests on the table in a stable
+/// pose, its depth is rendered from the cameras, the policy plans, and the chosen grasp is
+/// checked analytically and (with `physics`) in the rapier trial. Returns
+/// `{"report": ..., "grasps_json": ..., "timings": ...}`: `plan --json`'s plan report, the
+/// text of the `grasps.json` that `plan --out` writes, and each stage's seconds.
+#[pyfunction]
+#[pyo3(signature = (vertices, triangles, *, model = None, fuse = false, cem = false, hand_check = true, seed = 0, camera = "phoxi_s", views = None, distance_m = None, stable_pose = 0, physics = true, backend = "auto"))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn plan_mesh<'py>(
+    py: Python<'py>,
+    vertices: PyArrayLike2<'py, f32, AllowTypeChange>,
+    triangles: PyArrayLike2<'py, i64, AllowTypeChange>,
+    model: Option<&str>,
+    fuse: bool,
+    cem: bool,
+    hand_check: bool,
+    seed: u64,
+    camera: &str,
+    views: Option<usize>,
+    distance_m: Option<f32>,
+    stable_pose: usize,
+    physics: bool,
+    backend: &str,
+) -> PyResult<Bound<'py, PyAny>> {
+    let mesh = mesh_of(&vertices, &triangles)?;
+    let options = PlanOptions {
+        camera: camera.parse().map_err(camera_error)?,
+        views,
+        distance_m,
+        stable_pose,
+        physics,
+        ..options(fuse, cem, hand_check, seed)
+    };
+    let backend = backend_of(backend)?;
+    let net = network(model, &options)?;
+    let (policy, params) = options.on_mesh(net).map_err(pipeline_error)?;
+    let report = py
+        .detach(|| -> mvgrasp::Result<_> {
+            let renderer = renderer(backend)?;
+            plan_grasp(&renderer, &mesh, &policy, &params)
+        })
+        .map_err(pipeline_error)?;
+    let file = GraspsFile::new(
+        WorldFrame::Rendered,
+        &report.cameras,
+        &report.top,
+        report.rejections,
+        None,
+    );
+    let t = report.timings;
+    let timings = serde_json::json!({
+        "render_s": t.render_s, "fuse_s": t.fuse_s, "plan_s": t.plan_s, "check_s": t.check_s,
+    });
+    let result = to_python(
+        py,
+        &serde_json::json!({"report": report, "timings": timings}),
+    )?;
+    result.set_item("grasps_json", file.to_json().map_err(pipeline_error)?)?;
+    Ok(result)
 }

@@ -15,11 +15,20 @@ use pyo3::types::PyDict;
 use crate::arrays::{intrinsics_of, mesh_of, pose_of};
 use crate::errors::RenderError;
 
+/// The graphics backend a `backend` argument names; `ValueError` for another name.
+pub(crate) fn backend_of(backend: &str) -> PyResult<Backend> {
+    Backend::parse(backend).ok_or_else(|| {
+        PyValueError::new_err(format!(
+            "backend: {backend:?}, expected auto, vulkan, gl, metal or dx12"
+        ))
+    })
+}
+
 /// The renderers opened so far, one per backend asked for.
 static RENDERERS: Mutex<Vec<(Backend, Arc<Renderer>)>> = Mutex::new(Vec::new());
 
 /// The renderer of `backend`, opened on first use.
-fn renderer(backend: Backend) -> Result<Arc<Renderer>, mvgrasp::render::RenderError> {
+pub(crate) fn renderer(backend: Backend) -> Result<Arc<Renderer>, mvgrasp::render::RenderError> {
     let mut renderers = RENDERERS.lock().unwrap_or_else(PoisonError::into_inner);
     if let Some((_, r)) = renderers.iter().find(|(b, _)| *b == backend) {
         return Ok(Arc::clone(r));
@@ -69,11 +78,7 @@ pub(crate) fn render<'py>(
     backend: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let mesh = mesh_of(&vertices, &triangles)?;
-    let backend = Backend::parse(backend).ok_or_else(|| {
-        PyValueError::new_err(format!(
-            "backend: {backend:?}, expected auto, vulkan, gl, metal or dx12"
-        ))
-    })?;
+    let backend = backend_of(backend)?;
     if ks.len() != world_from_cameras.len() {
         return Err(PyValueError::new_err(format!(
             "ks and world_from_cameras: one per view, got {} and {}",

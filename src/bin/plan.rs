@@ -24,9 +24,8 @@ use mvgrasp::grasps_file::{GraspsFile, WorldFrame, write_overlay};
 use mvgrasp::infer::Gqcnn;
 use mvgrasp::mcap_log::write_plan_log;
 use mvgrasp::planner::{
-    CemParams, FusionParams, GqcnnPolicy, ObjectSource, PlanParams, PlanReport, ScoredGrasp,
-    SensorFiles, SensorPlanParams, SensorPlanReport, View, ViewSetting, VirtualScorer, models,
-    plan_grasp, plan_on_sensor_depth, plan_on_views_dir,
+    GqcnnPolicy, ObjectSource, PlanOptions, PlanReport, ScoredGrasp, SensorFiles, SensorPlanParams,
+    SensorPlanReport, View, models, plan_grasp, plan_on_sensor_depth, plan_on_views_dir,
 };
 use mvgrasp::render::{Backend, Renderer};
 use mvgrasp::{ObjectReport, ReportParams};
@@ -113,18 +112,11 @@ struct Args {
     mask: Option<PathBuf>,
 }
 
-/// Views the multi-view planner fuses unless told otherwise (the seed paper's setting).
-const FUSED_VIEWS: usize = 5;
-
 /// The network `--model` names, or the default for the planner.
 fn model_of(args: &Args) -> String {
-    args.model.clone().unwrap_or_else(|| {
-        if args.fuse {
-            models::MVGQCNN.name.to_string()
-        } else {
-            models::GQCNN_TOPDOWN.name.to_string()
-        }
-    })
+    args.model
+        .clone()
+        .unwrap_or_else(|| options_of(args).default_model().to_string())
 }
 
 /// No grasp survived: a result, not an error (exit code 3, the outputs still written).
@@ -153,12 +145,6 @@ fn run(args: &Args) -> Result<bool, String> {
     if let Some(dir) = &args.views_dir {
         return run_on_views_dir(args, dir);
     }
-    if args.views == Some(0) {
-        return Err("--views: at least 1".into());
-    }
-    if args.distance_m.is_some_and(|d| !(d.is_finite() && d > 0.0)) {
-        return Err("--distance-m: a distance in metres above 0".into());
-    }
     let preset: IntrinsicsPreset = args.camera.parse().map_err(|e| format!("--camera: {e}"))?;
     let intrinsics = Intrinsics::preset(preset);
     let object = args.object.load()?;
@@ -172,40 +158,16 @@ fn run(args: &Args) -> Result<bool, String> {
         },
     )
     .map_err(|e| e.to_string())?;
-    let (model_name, net) = load_model(&model_of(args))?;
-    let mut setting = ViewSetting::for_pose_inputs(net.architecture().pose_inputs);
-    if args.fuse {
-        setting = ViewSetting {
-            views: FUSED_VIEWS,
-            ..setting
-        };
-    }
-    let layout = PlanParams::default().views;
-    if args.views.is_some_and(|v| v > layout.count) {
-        return Err(format!(
-            "--views: at most {} (the test views)",
-            layout.count
-        ));
-    }
-    let mut params = PlanParams {
-        max_views: args.views.unwrap_or(setting.views),
-        intrinsics,
+    let options = PlanOptions {
+        camera: preset,
+        views: args.views,
+        distance_m: args.distance_m,
         stable_pose: args.stable_pose,
-        seed: args.object.seed,
         physics: !args.no_physics,
-        hand_check: !args.no_hand_check,
-        ..Default::default()
+        ..options_of(args)
     };
-    params.views.radius_m = args.distance_m.unwrap_or(setting.distance_m);
-    let gripper = params.labels.gripper().map_err(|e| e.to_string())?;
-    let mut policy = GqcnnPolicy::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
-    policy.cem = args.cem.then(CemParams::default);
-    if args.fuse {
-        // The views spread over the whole cap (the first top-down), not the first of ten.
-        params.views.count = params.max_views;
-        params.fusion = Some(FusionParams::default());
-        policy.fuse_with(VirtualScorer::shipped(gripper.max_opening_m).map_err(|e| e.to_string())?);
-    }
+    let (model_name, net) = load_model(&model_of(args))?;
+    let (policy, params) = options.on_mesh(net).map_err(|e| e.to_string())?;
     let backend = Backend::parse(&args.backend).ok_or_else(|| {
         format!(
             "--backend: unknown backend {:?} (expected auto, vulkan, gl, metal, dx12)",
@@ -271,6 +233,17 @@ fn write_outputs(
     Ok(())
 }
 
+/// The options every kind of plan shares.
+fn options_of(args: &Args) -> PlanOptions {
+    PlanOptions {
+        fuse: args.fuse,
+        cem: args.cem,
+        hand_check: !args.no_hand_check,
+        seed: args.object.seed,
+        ..PlanOptions::default()
+    }
+}
+
 /// The network, policy, gripper and settings of planning on sensor depth (`--depth`,
 /// `--views-dir`).
 fn sensor_setup(
@@ -285,21 +258,7 @@ fn sensor_setup(
     String,
 > {
     let (model_name, net) = load_model(&model_of(args))?;
-    let gripper = PlanParams::default()
-        .labels
-        .gripper()
-        .map_err(|e| e.to_string())?;
-    let mut policy = GqcnnPolicy::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
-    policy.cem = args.cem.then(CemParams::default);
-    let params = SensorPlanParams {
-        hand_check: !args.no_hand_check,
-        seed: args.object.seed,
-        fusion: args.fuse.then(FusionParams::default),
-        ..Default::default()
-    };
-    if args.fuse {
-        policy.fuse_with(VirtualScorer::shipped(gripper.max_opening_m).map_err(|e| e.to_string())?);
-    }
+    let (policy, gripper, params) = options_of(args).on_depth(net).map_err(|e| e.to_string())?;
     Ok((model_name, policy, gripper, params))
 }
 

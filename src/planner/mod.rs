@@ -2,6 +2,7 @@
 //! GQ-CNN policy over one or many views ([`policy`]), and the networks that ship with mvgrasp
 //! ([`models`]).
 
+pub mod options;
 pub mod pipeline;
 pub mod sensor;
 
@@ -10,6 +11,7 @@ pub use mvgrasp_planner::{
     Plan, ScoredGrasp, ShippedModel, View, ViewSetting, VirtualScorer, VirtualViewParams, models,
     sample_image_grasps, theta_rad,
 };
+pub use options::{FUSED_VIEWS, PlanOptions};
 pub use pipeline::{
     AnalyticCheck, PlanParams, PlanReport, PlanTimings, Scene, check_grasp, check_grasps,
     plan_grasp, render_scene,

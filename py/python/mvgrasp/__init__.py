@@ -3,14 +3,18 @@
 Units are metres, radians, seconds and kilograms everywhere. Every error mvgrasp raises is a
 subclass of :class:`MvGraspError`, whose message is one line naming the file and the fault.
 
-The work happens in Rust (the private module ``mvgrasp._native``); this package only re-exports
-it with types (see ``_native.pyi``). Grasp datasets have a friendlier face in
-:mod:`mvgrasp.grasp_dataset` (and :mod:`mvgrasp.ray_launcher` for clusters).
+The work happens in Rust (the private module ``mvgrasp._native``); this package re-exports it
+with types (see ``_native.pyi``) and gives it dataclasses: :class:`Planner` and its
+:class:`PlanResult` (:mod:`mvgrasp.planner`), :class:`Camera` (:mod:`mvgrasp.cameras`),
+:class:`Grasp` and the grasp analysis (:mod:`mvgrasp.grasps`). Grasp datasets have a friendlier
+face in :mod:`mvgrasp.grasp_dataset` (and :mod:`mvgrasp.ray_launcher` for clusters).
 """
 
+from mvgrasp import grasps
 from mvgrasp._native import (
     CameraError,
     DatasetError,
+    GraspError,
     MeshError,
     MvGraspError,
     PlanningError,
@@ -31,19 +35,42 @@ from mvgrasp._native import (
     mesh_from_arrays,
     object_categories,
     plan_depth,
+    plan_mesh,
     plan_views,
+    project_points,
     random_colors,
     read_grasp_manifest,
     read_grasp_shard,
     render,
     score_crops,
     stable_poses,
+    unproject_pixels,
     write_grasp_manifest,
 )
+from mvgrasp.cameras import Camera
+from mvgrasp.grasps import (
+    Grasp,
+    Sampling,
+    check_collision,
+    grasp_quality,
+    gripper,
+    physics_trial,
+    robust_quality,
+    sample_grasps,
+)
+from mvgrasp.planner import PlannedGrasp, Planner, PlanResult, ViewSummary
 
 __all__ = [
+    "Camera",
     "CameraError",
     "DatasetError",
+    "Grasp",
+    "GraspError",
+    "Sampling",
+    "PlanResult",
+    "PlannedGrasp",
+    "Planner",
+    "ViewSummary",
     "MeshError",
     "MvGraspError",
     "PlanningError",
@@ -51,10 +78,13 @@ __all__ = [
     "WeightsError",
     "__version__",
     "builtin_object",
+    "check_collision",
     "depth_to_points",
     "generate_grasp_dataset",
     "generate_grasp_shard",
     "grasp_dataset_num_shards",
+    "grasp_quality",
+    "gripper",
     "hemisphere_cameras",
     "intrinsics_preset",
     "load_intrinsics",
@@ -63,13 +93,20 @@ __all__ = [
     "mass_properties",
     "mesh_from_arrays",
     "object_categories",
+    "physics_trial",
     "plan_depth",
+    "plan_mesh",
     "plan_views",
+    "project_points",
     "random_colors",
     "read_grasp_manifest",
     "read_grasp_shard",
+    "robust_quality",
+    "sample_grasps",
     "render",
     "score_crops",
     "stable_poses",
+    "unproject_pixels",
+    "grasps",
     "write_grasp_manifest",
 ]

@@ -26,6 +26,10 @@ class RenderError(MvGraspError):
 class PlanningError(MvGraspError):
     """Depth images, views or a network that the planner cannot use."""
 
+class GraspError(MvGraspError):
+    """A gripper file (or an object) that the grasp analysis cannot use; the message names the
+    file."""
+
 class DatasetError(MvGraspError):
     """A dataset's config, folder, shards or manifest cannot be used; the message names the
     file."""
@@ -193,7 +197,8 @@ def plan_depth(
     cem: bool = False,
     hand_check: bool = True,
     seed: int = 0,
-) -> dict[str, Any]:
+    as_json: bool = False,
+) -> Any:
     """Plans a grasp on one depth image, as ``plan --depth`` does (the GIL released).
 
     ``depth``: float32 metres, shape ``(H, W)`` or ``(H, W, 1)``; NaN, infinities and 0 are
@@ -207,7 +212,8 @@ def plan_depth(
     Returns the content of ``grasps.json`` (format ``mvgrasp-grasps/1``): ``frame``,
     ``views``, ``grasps`` (best first, each with ``camera_from_gripper`` and
     ``world_from_gripper`` as 4x4 nested lists, ``width_m``, ``quality``, ``u``, ``v``,
-    ``angle_rad``, ``depth_m``, ``p``, ``phi_rad``, ``theta_rad``), ``rejections``, ``table``.
+    ``angle_rad``, ``depth_m``, ``p``, ``phi_rad``, ``theta_rad``), ``rejections``, ``table``;
+    with ``as_json``, the file's text, byte for byte what ``plan --out`` writes.
 
     Raises:
         ValueError: an array of the wrong shape, a camera matrix with skew, a pose that is not
@@ -228,7 +234,8 @@ def plan_views(
     cem: bool = False,
     hand_check: bool = True,
     seed: int = 0,
-) -> dict[str, Any]:
+    as_json: bool = False,
+) -> Any:
     """Plans a grasp over several depth images of one scene, as ``plan --views-dir`` does.
 
     One float32 ``(H, W)`` depth image (metres), 3x3 camera matrix and 4x4 ``world_from_camera``
@@ -328,3 +335,106 @@ def read_grasp_shard(path: str | os.PathLike[str]) -> dict[str, npt.NDArray[Any]
 
 def read_grasp_manifest(dir: str | os.PathLike[str]) -> dict[str, Any]:
     """The content of ``dir/dataset.json``, checked to be a grasp-dataset manifest."""
+
+def plan_mesh(
+    vertices: npt.ArrayLike,
+    triangles: npt.ArrayLike,
+    *,
+    model: str | None = None,
+    fuse: bool = False,
+    cem: bool = False,
+    hand_check: bool = True,
+    seed: int = 0,
+    camera: str = "phoxi_s",
+    views: int | None = None,
+    distance_m: float | None = None,
+    stable_pose: int = 0,
+    physics: bool = True,
+    backend: str = "auto",
+) -> dict[str, Any]:
+    """Plans a grasp on a mesh as ``plan --mesh`` does (rest, render, plan, check); returns
+    ``{"report", "grasps_json", "timings"}``: ``plan --json``'s plan report, the text of
+    ``grasps.json`` and each stage's seconds. ``ValueError`` for a bad option value,
+    ``CameraError`` for an unknown camera preset, ``RenderError``, ``WeightsError``."""
+
+def project_points(
+    points: npt.NDArray[np.float64],
+    k: npt.NDArray[np.float64],
+    width: int,
+    height: int,
+    world_from_camera: npt.NDArray[np.float64] | None = None,
+) -> npt.NDArray[np.float64]:
+    """The ``(N, 2)`` pixels of world points ``(N, 3)``; NaN behind the camera."""
+
+def unproject_pixels(
+    pixels: npt.NDArray[np.float64],
+    depths: npt.NDArray[np.float64],
+    k: npt.NDArray[np.float64],
+    width: int,
+    height: int,
+    world_from_camera: npt.NDArray[np.float64] | None = None,
+) -> npt.NDArray[np.float64]:
+    """The ``(N, 3)`` world points at pixels ``(N, 2)`` and depths ``(N,)``."""
+
+def gripper(spec: Any = None) -> dict[str, Any]:
+    """The gripper a preset name, a gripper file or a dict of fields names (``None``: the
+    datasets' Panda), as a dict of its fields. ``ValueError`` for an unknown name,
+    ``GraspError`` for a file it cannot use."""
+
+def sample_grasps(
+    vertices: npt.ArrayLike,
+    triangles: npt.ArrayLike,
+    *,
+    gripper: Any = None,
+    count: int = 100,
+    table_from_object: npt.NDArray[np.float64] | None = None,
+    params: dict[str, Any] | None = None,
+    seed: int = 0,
+) -> dict[str, Any]:
+    """Collision-free antipodal grasps on the mesh (object frame); the sampling report."""
+
+def grasp_quality(
+    vertices: npt.ArrayLike,
+    triangles: npt.ArrayLike,
+    object_from_gripper: npt.NDArray[np.float64],
+    *,
+    gripper: Any = None,
+    friction_coef: float = 0.5,
+    params: dict[str, Any] | None = None,
+) -> dict[str, Any]:
+    """Contacts, force closure and Ferrari-Canny epsilon of one grasp."""
+
+def robust_quality(
+    vertices: npt.ArrayLike,
+    triangles: npt.ArrayLike,
+    object_from_grippers: npt.NDArray[np.float64],
+    *,
+    gripper: Any = None,
+    params: dict[str, Any] | None = None,
+    seed: int = 0,
+) -> list[dict[str, Any]]:
+    """Robust Ferrari-Canny quality of one grasp or a batch ``(N, 4, 4)``."""
+
+def check_collision(
+    vertices: npt.ArrayLike,
+    triangles: npt.ArrayLike,
+    object_from_gripper: npt.NDArray[np.float64],
+    width_m: float,
+    *,
+    gripper: Any = None,
+    table_from_object: npt.NDArray[np.float64] | None = None,
+    params: dict[str, Any] | None = None,
+) -> dict[str, bool]:
+    """Whether the open hand on its approach meets the object or the table."""
+
+def physics_trial(
+    vertices: npt.ArrayLike,
+    triangles: npt.ArrayLike,
+    table_from_object: npt.NDArray[np.float64],
+    world_from_gripper: npt.NDArray[np.float64],
+    width_m: float,
+    *,
+    gripper: Any = None,
+    params: dict[str, Any] | None = None,
+) -> dict[str, Any]:
+    """The rapier close-lift-shake trial of one grasp; its outcome."""

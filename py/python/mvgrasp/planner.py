@@ -1,0 +1,269 @@
+"""Planning grasps: a :class:`Planner` with the options of the ``plan`` command, on depth
+images (one or several, with or without camera poses) and on meshes, returning a
+:class:`PlanResult` of dataclasses and the same ``grasps.json`` as the command.
+
+The keyword arguments carry the command's option names and defaults: ``model`` (a shipped
+network or an export's ``NAME.json``; default the top-down GQ-CNN, or the multi-view GQ-CNN
+with ``fuse``), ``fuse`` (the multi-view planner), ``cem``, ``hand_check`` (``--no-hand-check``
+is ``hand_check=False``), ``seed``; on meshes also ``camera``, ``views``, ``distance_m``,
+``stable_pose``, ``physics`` (``--no-physics``) and ``backend``. The GIL is released while a
+plan runs.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Optional, Union
+
+import numpy as np
+import numpy.typing as npt
+
+from mvgrasp import _native
+from mvgrasp.cameras import Camera
+from mvgrasp.grasps import Grasp
+
+
+@dataclass(frozen=True)
+class PlannedGrasp:
+    """One ranked grasp of a plan, as ``grasps.json`` holds it (poses as 4x4 arrays)."""
+
+    rank: int
+    view: int
+    quality: float
+    width_m: float
+    world_from_gripper: np.ndarray
+    camera_from_gripper: np.ndarray
+    u: float
+    v: float
+    angle_rad: float
+    depth_m: float
+    p: np.ndarray
+    phi_rad: float
+    theta_rad: float
+    view_quality: Optional[float] = None
+
+    @property
+    def grasp(self) -> Grasp:
+        """The grasp in the world, for the analysis functions of :mod:`mvgrasp.grasps`."""
+        return Grasp(self.world_from_gripper, self.width_m, self.quality)
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> PlannedGrasp:
+        arrays = {"world_from_gripper", "camera_from_gripper", "p"}
+        return cls(
+            **{k: np.asarray(v, dtype=np.float64) if k in arrays else v for k, v in d.items()}
+        )
+
+
+@dataclass(frozen=True)
+class ViewSummary:
+    """One view's share of a plan: its camera, how many of the ranked grasps came from it and
+    the best of their qualities; on a rendered mesh also the candidates it scored and the
+    camera's elevation."""
+
+    camera: Camera
+    ranked: int
+    best_quality: Optional[float]
+    candidates: Optional[int] = None
+    elevation_deg: Optional[float] = None
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """What a plan found. ``grasps`` are best first; ``grasps_json`` is the text of the
+    ``grasps.json`` the ``plan`` command writes for the same inputs, byte for byte."""
+
+    grasps: list[PlannedGrasp]
+    views: list[ViewSummary]
+    frame: str
+    rejections: dict[str, int]
+    timings: dict[str, float]
+    grasps_json: str = field(repr=False)
+    table: Optional[dict[str, Any]] = None
+    report: Optional[dict[str, Any]] = field(default=None, repr=False)
+
+    @property
+    def best(self) -> Optional[PlannedGrasp]:
+        """The best grasp, or ``None`` when no candidate survived."""
+        return self.grasps[0] if self.grasps else None
+
+    @property
+    def physics(self) -> Optional[dict[str, Any]]:
+        """On a rendered mesh with ``physics``: the rapier trial of the best grasp."""
+        return None if self.report is None else self.report.get("physics")
+
+    @property
+    def analytic(self) -> Optional[dict[str, Any]]:
+        """On a rendered mesh: the best grasp's robust epsilon, collision and label."""
+        return None if self.report is None else self.report.get("analytic")
+
+    def write(self, out: Union[str, os.PathLike[str]]) -> Path:
+        """Writes ``out/grasps.json`` (creating ``out``); its path."""
+        path = Path(out) / "grasps.json"
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(self.grasps_json)
+        return path
+
+    @classmethod
+    def _of(
+        cls,
+        text: str,
+        timings: dict[str, float],
+        report: Optional[dict[str, Any]] = None,
+    ) -> PlanResult:
+        content = json.loads(text)
+        grasps = [PlannedGrasp.from_dict(g) for g in content["grasps"]]
+        views = []
+        for i, v in enumerate(content["views"]):
+            fx, fy, cx, cy, width, height = v["intrinsics"]
+            camera = Camera(
+                np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]]),
+                int(width),
+                int(height),
+                np.asarray(v["world_from_camera"], dtype=np.float64),
+            )
+            mine = [g.quality for g in grasps if g.view == i]
+            summary = report["views"][i] if report is not None else {}
+            views.append(
+                ViewSummary(
+                    camera=camera,
+                    ranked=len(mine),
+                    best_quality=max(mine) if mine else None,
+                    candidates=summary.get("candidates"),
+                    elevation_deg=summary.get("elevation_deg"),
+                )
+            )
+        return cls(
+            grasps=grasps,
+            views=views,
+            frame=content["frame"],
+            rejections=content["rejections"],
+            timings=timings,
+            grasps_json=text,
+            table=content.get("table"),
+            report=report,
+        )
+
+
+def _f64(a: npt.ArrayLike) -> np.ndarray:
+    return np.ascontiguousarray(a, dtype=np.float64)
+
+
+def _depth(a: npt.ArrayLike) -> np.ndarray:
+    return a if isinstance(a, np.ndarray) and a.dtype == np.float32 else np.asarray(a, np.float32)
+
+
+class Planner:
+    """A grasp planner with ``plan``'s options (see the module docs)."""
+
+    def __init__(
+        self,
+        *,
+        model: Optional[str] = None,
+        fuse: bool = False,
+        cem: bool = False,
+        hand_check: bool = True,
+        seed: int = 0,
+    ) -> None:
+        self.model = model
+        self.fuse = fuse
+        self.cem = cem
+        self.hand_check = hand_check
+        self.seed = seed
+
+    def _options(self) -> dict[str, Any]:
+        return {
+            "model": self.model,
+            "fuse": self.fuse,
+            "cem": self.cem,
+            "hand_check": self.hand_check,
+            "seed": self.seed,
+        }
+
+    def plan(
+        self,
+        depth: npt.ArrayLike,
+        camera: Union[Camera, npt.ArrayLike],
+        *,
+        mask: Optional[npt.ArrayLike] = None,
+        world_from_camera: Optional[npt.ArrayLike] = None,
+    ) -> PlanResult:
+        """Plans on one depth image (float32 metres, ``(H, W)``; 0, NaN and infinities are
+        missing), as ``plan --depth`` does. ``camera``: a :class:`Camera` (its pose is used
+        unless ``world_from_camera`` is given) or a 3x3 camera matrix. Without a pose the
+        world is put on the table fitted in the image (frame ``estimated``)."""
+        if isinstance(camera, Camera):
+            k = camera.k
+            if world_from_camera is None and not np.array_equal(
+                camera.world_from_camera, np.eye(4)
+            ):
+                world_from_camera = camera.world_from_camera
+        else:
+            k = camera
+        started = time.perf_counter()
+        text = _native.plan_depth(
+            _depth(depth),
+            _f64(k),
+            mask=None if mask is None else np.asarray(mask, dtype=bool),
+            world_from_camera=None if world_from_camera is None else _f64(world_from_camera),
+            as_json=True,
+            **self._options(),
+        )
+        return PlanResult._of(text, {"total_s": time.perf_counter() - started})
+
+    def plan_views(
+        self,
+        depths: Sequence[npt.ArrayLike],
+        cameras: Sequence[Camera],
+        *,
+        masks: Optional[Sequence[Optional[npt.ArrayLike]]] = None,
+    ) -> PlanResult:
+        """Plans over several depth images of one scene with their posed cameras (one world
+        frame; with ``fuse`` its z up from the table), as ``plan --views-dir`` does."""
+        started = time.perf_counter()
+        text = _native.plan_views(
+            [_depth(d) for d in depths],
+            [_f64(c.k) for c in cameras],
+            [_f64(c.world_from_camera) for c in cameras],
+            masks=None
+            if masks is None
+            else [None if m is None else np.asarray(m, dtype=bool) for m in masks],
+            as_json=True,
+            **self._options(),
+        )
+        return PlanResult._of(text, {"total_s": time.perf_counter() - started})
+
+    def plan_mesh(
+        self,
+        vertices: npt.ArrayLike,
+        triangles: npt.ArrayLike,
+        *,
+        camera: str = "phoxi_s",
+        views: Optional[int] = None,
+        distance_m: Optional[float] = None,
+        stable_pose: int = 0,
+        physics: bool = True,
+        backend: str = "auto",
+    ) -> PlanResult:
+        """Plans on a mesh as ``plan --mesh`` does: rests it on the table in a stable pose,
+        renders the views' depth, plans, and checks the best grasp analytically and (with
+        ``physics``) in the rapier trial (:attr:`PlanResult.physics`). Timings per stage."""
+        started = time.perf_counter()
+        result = _native.plan_mesh(
+            vertices,
+            triangles,
+            camera=camera,
+            views=views,
+            distance_m=distance_m,
+            stable_pose=stable_pose,
+            physics=physics,
+            backend=backend,
+            **self._options(),
+        )
+        timings = dict(result["timings"], total_s=time.perf_counter() - started)
+        return PlanResult._of(result["grasps_json"], timings, result["report"])

@@ -1,0 +1,141 @@
+//! The options of a plan, shared by the `plan` command and the Python `Planner`, and the one
+//! place that turns them into a policy and its settings: the network's default, fusion and the
+//! virtual re-scoring, CEM, the hand check and the seed; for a rendered mesh also the camera,
+//! how many views how far away, the resting pose and the physics check.
+
+use mvgrasp_geometry::{Intrinsics, IntrinsicsPreset};
+use mvgrasp_grasp::Gripper;
+use mvgrasp_infer::Gqcnn;
+use mvgrasp_planner::{CemParams, FusionParams, GqcnnPolicy, ViewSetting, VirtualScorer, models};
+
+use crate::error::{Error, Result};
+use crate::planner::{PlanParams, SensorPlanParams};
+
+/// Views the multi-view planner fuses unless told otherwise (the seed paper's setting, the
+/// first top-down).
+pub const FUSED_VIEWS: usize = 5;
+
+/// What a plan is asked to do (`plan`'s options; the Python `Planner`'s keywords).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlanOptions {
+    /// The multi-view planner: views fused, every candidate's hand checked against all of them,
+    /// the best re-scored on virtual views ([`GqcnnPolicy::fuse_with`]).
+    pub fuse: bool,
+    /// Dex-Net 2.0's cross-entropy method in each view.
+    pub cem: bool,
+    /// Reject candidates whose open hand meets the observed depth.
+    pub hand_check: bool,
+    /// Seeds the sampler (and, on a mesh, the cameras).
+    pub seed: u64,
+    /// On a mesh: the camera's intrinsics.
+    pub camera: IntrinsicsPreset,
+    /// On a mesh: plan in the first this many test views; `None`: the network's setting
+    /// ([`ViewSetting`]), or [`FUSED_VIEWS`] when fusing.
+    pub views: Option<usize>,
+    /// On a mesh: the cameras' distance from the object, metres; `None`: the network's.
+    pub distance_m: Option<f32>,
+    /// On a mesh: the offered resting pose to put it in (0: the most probable).
+    pub stable_pose: usize,
+    /// On a mesh: run the rapier trial on the chosen grasp.
+    pub physics: bool,
+}
+
+impl Default for PlanOptions {
+    fn default() -> Self {
+        Self {
+            fuse: false,
+            cem: false,
+            hand_check: true,
+            seed: 0,
+            camera: IntrinsicsPreset::PhoxiS,
+            views: None,
+            distance_m: None,
+            stable_pose: 0,
+            physics: true,
+        }
+    }
+}
+
+impl PlanOptions {
+    /// The shipped network these options plan with when none is named: the multi-view GQ-CNN
+    /// when fusing (it proposes every view's candidates), else the top-down GQ-CNN.
+    pub fn default_model(&self) -> &'static str {
+        if self.fuse {
+            models::MVGQCNN.name
+        } else {
+            models::GQCNN_TOPDOWN.name
+        }
+    }
+
+    /// The policy around `net` for `gripper`.
+    fn policy(&self, net: Gqcnn, gripper: &Gripper) -> Result<GqcnnPolicy> {
+        let mut policy = GqcnnPolicy::new(net, gripper.max_opening_m)?;
+        policy.cem = self.cem.then(CemParams::default);
+        if self.fuse {
+            policy.fuse_with(VirtualScorer::shipped(gripper.max_opening_m)?);
+        }
+        Ok(policy)
+    }
+
+    /// The policy, gripper and settings of a plan on depth images (a sensor's, or views with
+    /// their cameras).
+    ///
+    /// # Errors
+    /// A network that does not fit the gripper, or shipped weights that cannot be loaded.
+    pub fn on_depth(&self, net: Gqcnn) -> Result<(GqcnnPolicy, Gripper, SensorPlanParams)> {
+        let gripper = PlanParams::default().labels.gripper()?;
+        let policy = self.policy(net, &gripper)?;
+        let params = SensorPlanParams {
+            hand_check: self.hand_check,
+            seed: self.seed,
+            fusion: self.fuse.then(FusionParams::default),
+            ..Default::default()
+        };
+        Ok((policy, gripper, params))
+    }
+
+    /// The policy and settings of a plan on a mesh rendered on the table ([`super::plan_grasp`]).
+    ///
+    /// # Errors
+    /// [`Error::PlanOption`] for no views, more than the test views, or a distance that is
+    /// not a positive length; and [`PlanOptions::on_depth`]'s.
+    pub fn on_mesh(&self, net: Gqcnn) -> Result<(GqcnnPolicy, PlanParams)> {
+        let mut setting = ViewSetting::for_pose_inputs(net.architecture().pose_inputs);
+        if self.fuse {
+            setting.views = FUSED_VIEWS;
+        }
+        let mut params = PlanParams {
+            intrinsics: Intrinsics::preset(self.camera),
+            stable_pose: self.stable_pose,
+            seed: self.seed,
+            physics: self.physics,
+            hand_check: self.hand_check,
+            ..Default::default()
+        };
+        let views = self.views.unwrap_or(setting.views);
+        if !(1..=params.views.count).contains(&views) {
+            return Err(Error::PlanOption {
+                name: "views",
+                value: views.to_string(),
+                expected: "1 to 10 (the test views)",
+            });
+        }
+        let distance_m = self.distance_m.unwrap_or(setting.distance_m);
+        if !(distance_m.is_finite() && distance_m > 0.0) {
+            return Err(Error::PlanOption {
+                name: "distance_m",
+                value: distance_m.to_string(),
+                expected: "a distance in metres above 0",
+            });
+        }
+        params.max_views = views;
+        params.views.radius_m = distance_m;
+        if self.fuse {
+            // The views spread over the whole cap (the first top-down), not the first of ten.
+            params.views.count = views;
+            params.fusion = Some(FusionParams::default());
+        }
+        let gripper = params.labels.gripper()?;
+        Ok((self.policy(net, &gripper)?, params))
+    }
+}
