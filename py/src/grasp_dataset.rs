@@ -44,6 +44,18 @@ fn inputs(
         Some(path) => GraspDatasetConfig::from_file(&path).map_err(dataset_error)?,
         None => GraspDatasetConfig::default(),
     };
+    let sources = library_sources(meshes, per_category, categories, library_seed)?;
+    Ok((sources, config))
+}
+
+/// The objects of a dataset: mesh files or folders, or (when `meshes` is `None`) the built-in
+/// library, `per_category` objects of each of `categories` (default all).
+pub(crate) fn library_sources(
+    meshes: Option<Vec<PathBuf>>,
+    per_category: u32,
+    categories: Option<Vec<String>>,
+    library_seed: u64,
+) -> PyResult<Vec<ObjectSource>> {
     let categories = categories
         .unwrap_or_default()
         .iter()
@@ -55,8 +67,7 @@ fn inputs(
         categories,
         library_seed,
     };
-    let sources = library.sources().map_err(PyValueError::new_err)?;
-    Ok((sources, config))
+    library.sources().map_err(PyValueError::new_err)
 }
 
 /// How many shards the dataset has.

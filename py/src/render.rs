@@ -4,16 +4,17 @@
 use std::sync::{Arc, Mutex, PoisonError};
 
 use mvgrasp::convert::render_view;
-use mvgrasp::dataset::{SceneData, TABLE_HALF_SIDE_M};
+use mvgrasp::dataset::{DatasetConfig, SceneData, TABLE_HALF_SIDE_M, write_dataset};
 use mvgrasp::render::{Backend, Colors, Renderer};
-use mvgrasp_geometry::{Camera, Pose3};
+use mvgrasp_geometry::{Camera, Intrinsics, IntrinsicsPreset, Pose3};
 use numpy::{AllowTypeChange, PyArray1, PyArrayLike2, PyArrayMethods, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::arrays::{intrinsics_of, mesh_of, pose_of};
-use crate::errors::RenderError;
+use crate::errors::{RenderError, camera_error, dataset_error};
+use crate::grasp_dataset::library_sources;
 
 /// The graphics backend a `backend` argument names; `ValueError` for another name.
 pub(crate) fn backend_of(backend: &str) -> PyResult<Backend> {
@@ -145,5 +146,47 @@ pub(crate) fn render<'py>(
     dict.set_item("rgb", PyArray1::from_vec(py, rgb).reshape([v, h, w, 3])?)?;
     dict.set_item("depth", PyArray1::from_vec(py, depth).reshape([v, h, w])?)?;
     dict.set_item("mask", PyArray1::from_vec(py, mask).reshape([v, h, w])?)?;
+    Ok(dict)
+}
+
+/// Renders the multi-view RGB-D dataset into `out`, as the CLI's `render` does (the same files,
+/// byte for byte): per object its training and novel test views (RGB, depth, masks, cameras),
+/// finished objects skipped on a rerun. The objects are mesh files or folders (`meshes`), or
+/// the built-in library (`per_category` of each of `categories`, default all); `seed` seeds
+/// the camera layouts and colours, `camera` is an intrinsics preset, `table` the table plane.
+/// Returns `{"written", "skipped", "views"}`. The GIL is released while it runs.
+#[pyfunction]
+#[pyo3(signature = (out, *, meshes = None, per_category = 1, categories = None, library_seed = 0, seed = 0, camera = "phoxi_s", table = true, backend = "auto"))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn generate_rgbd_dataset<'py>(
+    py: Python<'py>,
+    out: std::path::PathBuf,
+    meshes: Option<Vec<std::path::PathBuf>>,
+    per_category: u32,
+    categories: Option<Vec<String>>,
+    library_seed: u64,
+    seed: u64,
+    camera: &str,
+    table: bool,
+    backend: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let preset: IntrinsicsPreset = camera.parse().map_err(camera_error)?;
+    let backend = backend_of(backend)?;
+    let sources = library_sources(meshes, per_category, categories, library_seed)?;
+    let config = DatasetConfig {
+        seed,
+        intrinsics: Intrinsics::preset(preset),
+        table,
+        ..Default::default()
+    };
+    let summary = py.detach(|| -> mvgrasp::Result<_> {
+        let renderer = renderer(backend)?;
+        write_dataset(&renderer, &sources, &config, &out, false)
+    });
+    let summary = summary.map_err(dataset_error)?;
+    let dict = PyDict::new(py);
+    dict.set_item("written", summary.written)?;
+    dict.set_item("skipped", summary.skipped)?;
+    dict.set_item("views", summary.views)?;
     Ok(dict)
 }

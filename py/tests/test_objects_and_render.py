@@ -178,6 +178,28 @@ def read_png(path: Path) -> np.ndarray:
     return np.rint(pixels * scale).astype(np.int64)
 
 
+def test_the_rgbd_dataset_from_python_is_the_cli_dataset_byte_for_byte(tmp_path: Path) -> None:
+    subprocess.run(
+        ["cargo", "run", "--quiet", "--profile", "dist", "--bin", "render", "--",
+         "--out", str(tmp_path / "cli"), "--categories", "can", "--seed", "3", "--quiet"],
+        cwd=REPO_ROOT, check=True,
+    )  # fmt: skip
+    summary = mvgrasp.generate_rgbd_dataset(tmp_path / "python", categories=["can"], seed=3)
+    assert summary == {"written": 1, "skipped": 0, "views": 30}
+    cli = sorted(p.relative_to(tmp_path / "cli") for p in (tmp_path / "cli").rglob("*"))
+    ours = sorted(p.relative_to(tmp_path / "python") for p in (tmp_path / "python").rglob("*"))
+    assert cli == ours and len(cli) > 90
+    for path in cli:
+        if (tmp_path / "cli" / path).is_file():
+            assert (tmp_path / "cli" / path).read_bytes() == (
+                tmp_path / "python" / path
+            ).read_bytes(), path
+    again = mvgrasp.generate_rgbd_dataset(tmp_path / "python", categories=["can"], seed=3)
+    assert again == {"written": 0, "skipped": 1, "views": 0}
+    with pytest.raises(mvgrasp.CameraError, match="kinect"):
+        mvgrasp.generate_rgbd_dataset(tmp_path / "other", camera="kinect")
+
+
 def test_rendering_from_python_equals_the_cli_render(tmp_path: Path) -> None:
     out = tmp_path / "dataset"
     subprocess.run(

@@ -438,3 +438,19 @@ def physics_trial(
     params: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """The rapier close-lift-shake trial of one grasp; its outcome."""
+
+def generate_rgbd_dataset(
+    out: str | os.PathLike[str],
+    *,
+    meshes: list[str] | None = None,
+    per_category: int = 1,
+    categories: list[str] | None = None,
+    library_seed: int = 0,
+    seed: int = 0,
+    camera: str = "phoxi_s",
+    table: bool = True,
+    backend: str = "auto",
+) -> dict[str, int]:
+    """Renders the multi-view RGB-D dataset into ``out`` as ``render`` does (the same bytes):
+    per object its training and novel test views, finished objects skipped; returns
+    ``{"written", "skipped", "views"}``."""
