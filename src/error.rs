@@ -108,6 +108,12 @@ pub enum Error {
         /// What would be valid.
         expected: &'static str,
     },
+    /// RGB views that depth cannot be predicted from ([`crate::stereo`]).
+    #[error("depth from RGB: {problem}")]
+    Stereo {
+        /// What is wrong.
+        problem: String,
+    },
     /// A dataset asked of no objects.
     #[error("dataset: no objects to make a dataset of")]
     NoObjects,
@@ -194,7 +200,9 @@ impl Error {
             Self::Grasp(_) => ErrorKind::Grasp,
             Self::Render(_) => ErrorKind::Rendering,
             Self::Infer(_) => ErrorKind::Weights,
-            Self::Planning(_) | Self::PlanOption { .. } => ErrorKind::Planning,
+            Self::Planning(_) | Self::PlanOption { .. } | Self::Stereo { .. } => {
+                ErrorKind::Planning
+            }
             Self::Io { .. } | Self::Png { .. } => ErrorKind::Io,
             Self::ConfigFile { .. }
             | Self::Toml { .. }

@@ -19,6 +19,7 @@ pub mod mcap_log;
 pub mod planner;
 pub mod report;
 pub mod sensor_files;
+pub mod stereo;
 
 pub use error::{Error, ErrorKind, Result};
 pub use mvgrasp_geometry as geometry;
