@@ -36,10 +36,11 @@ use mvgrasp::grasp::GraspObject;
 use mvgrasp::grasp::physics::FailureStage;
 use mvgrasp::infer::Gqcnn;
 use mvgrasp::planner::{
-    CemParams, FusionParams, GqcnnPolicy, PlanParams, ShippedModel, VirtualScorer, check_grasps,
-    models, plan_grasp,
+    CemParams, FusionParams, GqcnnPolicy, PlanParams, RgbInput, ShippedModel, VirtualScorer,
+    check_grasps, models, plan_grasp,
 };
 use mvgrasp::render::{Backend, Renderer};
+use mvgrasp::stereo::SweepParams;
 
 /// Plan with each policy on unseen objects; check the chosen grasps in physics.
 #[derive(Parser, Debug)]
@@ -91,7 +92,9 @@ struct Args {
     /// one (a candidate measured before it ships).
     #[arg(long)]
     mvgqcnn: Option<PathBuf>,
-    /// The policies (topdown, per-view, fused-3, fused-5, fused-10); all when none is given.
+    /// The policies (topdown, per-view, fused-3, fused-5, fused-10, and rgb-fused-N: the fused
+    /// planner on depth predicted from N RGB views by the plane-sweep baseline); all but the
+    /// RGB ones when none is given.
     #[arg(long = "policy")]
     policies: Vec<String>,
     /// The first built-in object index of each category (30: the report set; 50: the
@@ -124,6 +127,9 @@ struct Args {
     /// The fused policies' hand check lets the hand into space no view has seen.
     #[arg(long)]
     allow_unknown: bool,
+    /// The RGB policies colour the objects per triangle instead of per vertex.
+    #[arg(long)]
+    rgb_per_face: bool,
 }
 
 /// A policy of the evaluation: its label, network, views, their distance, and whether the
@@ -134,6 +140,8 @@ struct Policy {
     views: usize,
     radius_m: f32,
     fused: bool,
+    /// Depth predicted from RGB by the baseline instead of rendered.
+    rgb: bool,
 }
 
 /// The policies named on the command line (all without names, the top-down one alone with
@@ -156,6 +164,7 @@ fn policies(args: &Args) -> Result<Vec<Policy>, String> {
                     views: 1,
                     radius_m: 0.7,
                     fused: false,
+                    rgb: false,
                 },
                 "per-view" => Policy {
                     label: "MV-GQ-CNN, 10 views".into(),
@@ -163,23 +172,31 @@ fn policies(args: &Args) -> Result<Vec<Policy>, String> {
                     views: 10,
                     radius_m: args.mv_radius_m,
                     fused: false,
+                    rgb: false,
                 },
                 _ => {
+                    let rgb = name.starts_with("rgb-");
                     let views = name
+                        .trim_start_matches("rgb-")
                         .strip_prefix("fused-")
                         .and_then(|n| n.parse::<usize>().ok())
                         .filter(|&n| n > 0)
                         .ok_or_else(|| {
                             format!(
-                                "--policy {name}: expected topdown, per-view or fused-N (N views)"
+                                "--policy {name}: expected topdown, per-view, fused-N or rgb-fused-N (N views)"
                             )
                         })?;
                     Policy {
-                        label: format!("fused, {views} views"),
+                        label: if rgb {
+                            format!("fused, {views} RGB views")
+                        } else {
+                            format!("fused, {views} views")
+                        },
                         model: models::MVGQCNN,
                         views,
                         radius_m: args.mv_radius_m,
                         fused: true,
+                        rgb,
                     }
                 }
             })
@@ -273,6 +290,10 @@ fn run(args: &Args) -> Result<(), String> {
             ..Default::default()
         };
         params.labels.physics_shape.shell = args.shell;
+        params.depth_from_rgb = p.rgb.then(|| RgbInput {
+            sweep: SweepParams::default(),
+            per_face: args.rgb_per_face,
+        });
         params.labels.physics.grip_true_surface = args.grip_surface;
         params.views.radius_m = p.radius_m;
         if p.fused {

@@ -169,6 +169,34 @@ fn decode_png(
     Ok((info, bytes))
 }
 
+/// Reads an 8-bit RGB (or RGBA, the alpha dropped) PNG as `(width, height, pixels)`, row-major.
+///
+/// # Errors
+/// [`PlannerError::File`] naming the file: unreadable, not a PNG, or not 8-bit colour.
+pub fn read_rgb(path: impl AsRef<Path>) -> Result<(u32, u32, Vec<[u8; 3]>)> {
+    let path = path.as_ref();
+    let fail = |detail: String| PlannerError::File {
+        path: path.to_path_buf(),
+        detail,
+    };
+    let (info, bytes) = decode_png(path, png::Transformations::IDENTITY).map_err(fail)?;
+    let channels = match (info.color_type, info.bit_depth) {
+        (png::ColorType::Rgb, png::BitDepth::Eight) => 3,
+        (png::ColorType::Rgba, png::BitDepth::Eight) => 4,
+        (colour, depth) => {
+            return Err(fail(format!(
+                "a {colour:?} {}-bit PNG: expected an 8-bit RGB image",
+                depth as u8
+            )));
+        }
+    };
+    let pixels = bytes
+        .chunks_exact(channels)
+        .map(|p| [p[0], p[1], p[2]])
+        .collect();
+    Ok((info.width, info.height, pixels))
+}
+
 /// Reads an object mask: a PNG (any colour type and depth) whose non-zero pixels (in any
 /// colour channel; alpha is ignored) are the object, for a `width` x `height` depth image.
 ///

@@ -12,4 +12,5 @@ mod grasp_dataset;
 mod layering;
 mod plan;
 mod render_depth;
+mod rgb;
 mod sensor_depth;

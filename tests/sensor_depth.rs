@@ -392,21 +392,7 @@ fn plan_on_depth_writes_grasps_json_and_an_overlay() {
 #[test]
 fn plan_over_a_rendered_views_folder() {
     let dir = tempfile::tempdir().unwrap();
-    let rendered = Command::new(env!("CARGO_BIN_EXE_render"))
-        .args([
-            "--out",
-            dir.path().to_str().unwrap(),
-            "--categories",
-            "box",
-            "--quiet",
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        rendered.status.success(),
-        "{}",
-        String::from_utf8_lossy(&rendered.stderr)
-    );
+    crate::common::render_dataset(dir.path(), "box");
     let views_dir = dir.path().join("box_000/test");
     let out = dir.path().join("out");
     let planned = Command::new(env!("CARGO_BIN_EXE_plan"))

@@ -25,9 +25,11 @@ use mvgrasp::infer::Gqcnn;
 use mvgrasp::mcap_log::write_plan_log;
 use mvgrasp::planner::{
     GqcnnPolicy, ObjectSource, PlanOptions, PlanReport, ScoredGrasp, SensorFiles, SensorPlanParams,
-    SensorPlanReport, View, models, plan_grasp, plan_on_sensor_depth, plan_on_views_dir,
+    SensorPlanReport, View, models, plan_grasp, plan_on_rgb_dir, plan_on_sensor_depth,
+    plan_on_views_dir,
 };
 use mvgrasp::render::{Backend, Renderer};
+use mvgrasp::stereo::SweepParams;
 use mvgrasp::{ObjectReport, ReportParams};
 use serde::Serialize;
 
@@ -100,6 +102,16 @@ struct Args {
     /// optionally `NNN_mask.png`; a `render` dataset's `train` or `test` folder is one.
     #[arg(long, conflicts_with_all = ["depth", "mesh", "views", "distance_m", "stable_pose"])]
     views_dir: Option<PathBuf>,
+    /// Plan on RGB views instead: a folder with `cameras.json` (the cameras posed in the table
+    /// frame, as `render` writes them) and per camera `NNN_rgb.png`, optionally `NNN_mask.png`
+    /// (a `render` dataset's `test` folder is one); their depth predicted (`--depth-from`),
+    /// then the multi-view planner (`--fuse` implied).
+    #[arg(long, conflicts_with_all = ["depth", "mesh", "views", "distance_m", "stable_pose", "views_dir"])]
+    rgb: Option<PathBuf>,
+    /// With --rgb, how depth is predicted: `baseline`, the classical plane sweep inside the
+    /// masks' visual hull (the Learnt Stereo Machine is not shipped yet).
+    #[arg(long, default_value = "baseline")]
+    depth_from: String,
     /// Write `grasps.json` (the ranked grasps with their poses; README, "grasps.json") and, for
     /// sensor depth, a picture of the best grasps over each view (`overlay_N.png`) and an MCAP
     /// log for robot tooling (`plan.mcap`: depth, calibrations, poses, table, grasps) into this
@@ -142,7 +154,7 @@ fn run(args: &Args) -> Result<bool, String> {
     if let Some(depth) = &args.depth {
         return run_on_sensor_depth(args, depth);
     }
-    if let Some(dir) = &args.views_dir {
+    if let Some(dir) = args.views_dir.as_ref().or(args.rgb.as_ref()) {
         return run_on_views_dir(args, dir);
     }
     let preset: IntrinsicsPreset = args.camera.parse().map_err(|e| format!("--camera: {e}"))?;
@@ -236,7 +248,8 @@ fn write_outputs(
 /// The options every kind of plan shares.
 fn options_of(args: &Args) -> PlanOptions {
     PlanOptions {
-        fuse: args.fuse,
+        // Views from RGB go to the multi-view planner.
+        fuse: args.fuse || args.rgb.is_some(),
         cem: args.cem,
         hand_check: !args.no_hand_check,
         seed: args.object.seed,
@@ -300,7 +313,25 @@ fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<bool, String> {
 fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
     use std::fmt::Write;
     let (model_name, policy, gripper, params) = sensor_setup(args)?;
-    let report = plan_on_views_dir(&policy, &gripper, dir, &params).map_err(|e| e.to_string())?;
+    let (report, depth) = if args.rgb.is_some() {
+        if args.depth_from != "baseline" {
+            return Err(format!(
+                "--depth-from: {:?}, expected baseline (the Learnt Stereo Machine is not shipped yet)",
+                args.depth_from
+            ));
+        }
+        let rgb = plan_on_rgb_dir(&policy, &gripper, dir, &params, &SweepParams::default())
+            .map_err(|e| e.to_string())?;
+        let depth = format!(
+            "depth: predicted from RGB by the plane-sweep baseline in {:.2} s\n",
+            rgb.depth_s
+        );
+        (rgb.plan, depth)
+    } else {
+        let report =
+            plan_on_views_dir(&policy, &gripper, dir, &params).map_err(|e| e.to_string())?;
+        (report, String::new())
+    };
     let cameras: Vec<_> = report.views.iter().map(|v| v.camera).collect();
     let file = GraspsFile::new(
         WorldFrame::Given,
@@ -319,6 +350,7 @@ fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
             dir.display(),
             report.views.len()
         );
+        s.push_str(&depth);
         let _ = writeln!(
             s,
             "   view  elevation  table inliers  object pixels  candidates  best in the top 10"

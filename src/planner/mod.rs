@@ -4,6 +4,7 @@
 
 pub mod options;
 pub mod pipeline;
+pub mod rgb;
 pub mod sensor;
 
 pub use mvgrasp_planner::{
@@ -13,9 +14,10 @@ pub use mvgrasp_planner::{
 };
 pub use options::{FUSED_VIEWS, PlanOptions};
 pub use pipeline::{
-    AnalyticCheck, PlanParams, PlanReport, PlanTimings, Scene, check_grasp, check_grasps,
-    plan_grasp, render_scene,
+    AnalyticCheck, PlanParams, PlanReport, PlanTimings, RgbInput, Scene, check_grasp, check_grasps,
+    plan_grasp, render_rgb, render_scene,
 };
+pub use rgb::{RgbPlanReport, plan_on_rgb_dir, predict_views, read_rgb_dir};
 pub use sensor::{
     ObjectSource, SensorFiles, SensorPlanParams, SensorPlanReport, ViewsPlanReport,
     plan_on_sensor_depth, plan_on_view, plan_on_views, plan_on_views_dir, read_view,

@@ -8,12 +8,16 @@ use mvgrasp_geometry::{
 };
 use mvgrasp_grasp::physics::{PhysicsObject, PhysicsOutcome};
 use mvgrasp_grasp::{GraspLabel, GraspObject, Gripper, PaperGrasp, label_grasps};
-use mvgrasp_render::Renderer;
+use mvgrasp_render::{Colors, Renderer, random_colors};
 use serde::Serialize;
 
+use crate::convert::render_view;
+use crate::dataset::{OBJECT_ID, SceneData, TABLE_HALF_SIDE_M, splitmix};
 use crate::error::Result;
 use crate::grasp_dataset::GraspDatasetConfig;
 use crate::grasp_dataset::object::render_depths;
+use crate::planner::rgb::predict_views;
+use crate::stereo::{RgbView, SweepParams};
 use mvgrasp_planner::{Fusion, FusionParams, GqcnnPolicy, Rejections, ScoredGrasp, View};
 
 /// The best candidates a report lists (and the hand check makes sure of).
@@ -43,6 +47,11 @@ pub struct PlanParams {
     /// observed, or whose contacts are off the observed surface
     /// ([`mvgrasp_planner::Plan::reject_colliding`]).
     pub hand_check: bool,
+    /// Plan on depth predicted from RGB instead of the rendered depth: the views are rendered
+    /// in colour (random colours, as the RGB-D datasets' test views) with the object's masks,
+    /// and each view's depth comes from the others ([`crate::stereo`]); the masks go with the
+    /// views. `None`: the rendered depth.
+    pub depth_from_rgb: Option<RgbInput>,
     /// Fuse the views ([`Fusion`]) before the hand check: the open hand must also stay out of
     /// space that no view has seen, and above the table; and the policy's virtual scorer, if it
     /// has one, re-scores the best candidates on views drawn from the fused points. `None`:
@@ -63,9 +72,20 @@ impl Default for PlanParams {
             labels,
             physics: true,
             hand_check: true,
+            depth_from_rgb: None,
             fusion: None,
         }
     }
+}
+
+/// How [`PlanParams::depth_from_rgb`] colours the object and predicts depth.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RgbInput {
+    /// The plane sweep's settings.
+    pub sweep: SweepParams,
+    /// Random colours per triangle (as half the RGB-D datasets' objects) instead of per vertex
+    /// (interpolated across the faces).
+    pub per_face: bool,
 }
 
 /// One view's share of the plan.
@@ -128,7 +148,8 @@ pub struct PlanReport {
 /// Seconds spent in each stage of [`plan_grasp`].
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PlanTimings {
-    /// Rendering the views' depth.
+    /// Rendering the views' depth (with [`PlanParams::depth_from_rgb`]: rendering them in
+    /// colour and predicting their depth).
     pub render_s: f64,
     /// Fusing the views (part of `plan_s`).
     pub fuse_s: f64,
@@ -171,19 +192,80 @@ pub fn render_scene(
         .views
         .cameras(params.intrinsics, target, params.seed)?;
     cameras.truncate(params.max_views.max(1));
-    let depths = render_depths(renderer, mesh, &table_from_object, &cameras)?;
-    let views = cameras
-        .into_iter()
-        .zip(depths)
-        .enumerate()
-        .map(|(i, (camera, depth))| View::new(i, camera, depth))
-        .collect::<mvgrasp_planner::Result<Vec<_>>>()?;
+    let views = match &params.depth_from_rgb {
+        None => render_depths(renderer, mesh, &table_from_object, &cameras)?
+            .into_iter()
+            .zip(cameras)
+            .enumerate()
+            .map(|(i, (depth, camera))| View::new(i, camera, depth))
+            .collect::<mvgrasp_planner::Result<Vec<_>>>()?,
+        Some(rgb) => {
+            let views: Vec<RgbView> = render_rgb(
+                renderer,
+                mesh,
+                &table_from_object,
+                &cameras,
+                rgb,
+                params.seed,
+            )?
+            .into_iter()
+            .map(|(view, _)| view)
+            .collect();
+            predict_views(&views, &rgb.sweep)?
+        }
+    };
     Ok(Scene {
         stable_pose: pose_index,
         stable_pose_probability: pose.probability,
         table_from_object,
         views,
     })
+}
+
+/// The views of `cameras` in colour, with the object's masks, and the rendered (true) depth of
+/// each beside it: the mesh in random colours seeded by `seed` on the datasets' grey table.
+///
+/// # Errors
+/// A renderer error.
+pub fn render_rgb(
+    renderer: &Renderer,
+    mesh: &TriangleMesh,
+    table_from_object: &Pose3,
+    cameras: &[Camera],
+    rgb: &RgbInput,
+    seed: u64,
+) -> Result<Vec<(RgbView, Vec<f32>)>> {
+    let data = SceneData::of_mesh(mesh, table_from_object, TABLE_HALF_SIDE_M);
+    let count = if rgb.per_face {
+        mesh.triangles().len()
+    } else {
+        mesh.vertices().len()
+    };
+    let colors = random_colors(splitmix(seed ^ 0x7267_6221), count);
+    let colors = if rgb.per_face {
+        Colors::PerFace(&colors)
+    } else {
+        Colors::PerVertex(&colors)
+    };
+    let scene = renderer.upload(&data.mesh_inputs(mesh.triangles(), colors, true))?;
+    let views: Vec<_> = cameras.iter().map(render_view).collect();
+    let frames = renderer.render(&scene, &views)?;
+    Ok(cameras
+        .iter()
+        .zip(frames)
+        .map(|(camera, frame)| {
+            let view = RgbView {
+                camera: *camera,
+                rgb: frame
+                    .rgb
+                    .chunks_exact(3)
+                    .map(|p| [p[0], p[1], p[2]])
+                    .collect(),
+                mask: Some(frame.mask.iter().map(|&m| m == OBJECT_ID).collect()),
+            };
+            (view, frame.depth_m)
+        })
+        .collect())
 }
 
 /// Checks `grasp` made for `gripper` on `object` at `table_from_object`: the grasp dataset's

@@ -286,7 +286,23 @@ pub fn read_view(files: &SensorFiles) -> Result<View> {
 ///
 /// # Errors
 /// A `dataset.json` that cannot be read as JSON (its units would be guessed).
-fn render_conventions(dir: &Path) -> Result<(f32, Option<u8>)> {
+/// The path of `dir/cameras.json` and its cameras (at least one).
+///
+/// # Errors
+/// The file missing or unreadable, not a list of cameras, or empty; naming the file.
+pub(crate) fn read_cameras_json(dir: &Path) -> Result<(std::path::PathBuf, Vec<Camera>)> {
+    let path = dir.join("cameras.json");
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| mismatch(&path, format!("cannot read the cameras: {e}")))?;
+    let cameras: Vec<Camera> = serde_json::from_str(&text)
+        .map_err(|e| mismatch(&path, format!("not a list of cameras: {e}")))?;
+    if cameras.is_empty() {
+        return Err(mismatch(&path, "no camera".into()));
+    }
+    Ok((path, cameras))
+}
+
+pub(crate) fn render_conventions(dir: &Path) -> Result<(f32, Option<u8>)> {
     let Some(path) = [dir.to_path_buf(), dir.join(".."), dir.join("../..")]
         .into_iter()
         .map(|d| d.join("dataset.json"))
@@ -307,7 +323,7 @@ fn render_conventions(dir: &Path) -> Result<(f32, Option<u8>)> {
     Ok((units, object_id))
 }
 
-fn mismatch(path: &Path, detail: String) -> Error {
+pub(crate) fn mismatch(path: &Path, detail: String) -> Error {
     Error::Planning(mvgrasp_planner::PlannerError::File {
         path: path.to_path_buf(),
         detail,
@@ -346,14 +362,7 @@ pub struct ViewsPlanReport {
 /// A missing or unreadable `cameras.json`, a camera without a depth image, a depth image or
 /// mask whose size is not its camera's, or one with no camera; each names its file.
 pub fn read_views_dir(dir: &Path) -> Result<Vec<View>> {
-    let cameras_path = dir.join("cameras.json");
-    let text = std::fs::read_to_string(&cameras_path)
-        .map_err(|e| mismatch(&cameras_path, format!("cannot read the cameras: {e}")))?;
-    let cameras: Vec<Camera> = serde_json::from_str(&text)
-        .map_err(|e| mismatch(&cameras_path, format!("not a list of cameras: {e}")))?;
-    if cameras.is_empty() {
-        return Err(mismatch(&cameras_path, "no camera".into()));
-    }
+    let (cameras_path, cameras) = read_cameras_json(dir)?;
     let (units, object_id) = render_conventions(dir)?;
     // Depth images past the cameras' count: the folder and its cameras disagree.
     let extra = dir.join(format!("{:03}_depth.npy", cameras.len()));

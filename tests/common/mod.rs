@@ -16,3 +16,23 @@ pub fn renderer() -> Option<Renderer> {
         }
     }
 }
+
+/// Renders the RGB-D dataset of one built-in object of `category` into `out` with the
+/// `render` command (its `CATEGORY_000/{train,test}` folders).
+pub fn render_dataset(out: &std::path::Path, category: &str) {
+    let rendered = std::process::Command::new(env!("CARGO_BIN_EXE_render"))
+        .args([
+            "--out",
+            out.to_str().unwrap(),
+            "--categories",
+            category,
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        rendered.status.success(),
+        "{}",
+        String::from_utf8_lossy(&rendered.stderr)
+    );
+}

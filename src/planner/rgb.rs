@@ -1,0 +1,141 @@
+//! Planning on RGB views (`plan --rgb DIR`): the views' depth predicted from the images and
+//! their cameras, then the multi-view planner on it, as on a depth camera's views.
+//!
+//! A folder holds `cameras.json` (the cameras, posed in the table frame, as `render` writes
+//! them) and per camera `NNN_rgb.png` (8-bit RGB), optionally `NNN_mask.png` (the object's
+//! pixels; a `render` dataset's `train` or `test` folder is one). Depth comes from the
+//! classical baseline ([`crate::stereo`]); the Learnt Stereo Machine takes the same seam.
+
+use std::path::Path;
+use std::time::Instant;
+
+use mvgrasp_planner::{DepthImage, GqcnnPolicy, Mask, View};
+
+use crate::error::Result;
+use crate::planner::sensor::{mismatch, read_cameras_json, render_conventions};
+use crate::planner::{SensorPlanParams, ViewsPlanReport, plan_on_views};
+use crate::sensor_files::{read_mask_of, read_rgb};
+use crate::stereo::{RgbView, SweepParams, sweep_depths};
+
+/// Reads the RGB views of `dir` (see the module docs).
+///
+/// # Errors
+/// One line naming the file: `cameras.json` missing or not a list of cameras; an image
+/// missing for a camera, or one past the cameras; an image that is not 8-bit RGB or not its
+/// camera's size; a mask of another size, or one with no object pixel (the camera does not
+/// see the object); a camera looking away from the table.
+pub fn read_rgb_dir(dir: &Path) -> Result<Vec<RgbView>> {
+    let (cameras_path, cameras) = read_cameras_json(dir)?;
+    let extra = dir.join(format!("{:03}_rgb.png", cameras.len()));
+    if extra.is_file() {
+        return Err(mismatch(
+            &extra,
+            format!(
+                "{} lists {} cameras, but this is image {}",
+                cameras_path.display(),
+                cameras.len(),
+                cameras.len()
+            ),
+        ));
+    }
+    let (_, object_id) = render_conventions(dir)?;
+    let mut views = Vec::with_capacity(cameras.len());
+    for (i, camera) in cameras.into_iter().enumerate() {
+        let path = dir.join(format!("{i:03}_rgb.png"));
+        if !path.is_file() {
+            return Err(mismatch(
+                &path,
+                format!("camera {i} of {} has no image", cameras_path.display()),
+            ));
+        }
+        let (width, height, rgb) = read_rgb(&path)?;
+        let k = camera.intrinsics;
+        if (k.width, k.height) != (width, height) {
+            return Err(mismatch(
+                &path,
+                format!(
+                    "{width} x {height} pixels, but its camera in {} is {} x {}",
+                    cameras_path.display(),
+                    k.width,
+                    k.height
+                ),
+            ));
+        }
+        if camera
+            .world_from_camera
+            .transform_vector(mvgrasp_geometry::Vec3::Z)
+            .z
+            >= 0.0
+        {
+            return Err(mismatch(
+                &cameras_path,
+                format!("camera {i} looks up, away from the table (z up in the world)"),
+            ));
+        }
+        let mask_path = dir.join(format!("{i:03}_mask.png"));
+        let mask = if mask_path.is_file() {
+            // A mask with no object pixel: the camera does not see the object.
+            let mask = read_mask_of(&mask_path, width, height, object_id)?;
+            let w = i64::from(width);
+            Some(
+                (0..i64::from(width) * i64::from(height))
+                    .map(|p| mask.at(p % w, p / w))
+                    .collect(),
+            )
+        } else {
+            None
+        };
+        views.push(RgbView { camera, rgb, mask });
+    }
+    Ok(views)
+}
+
+/// The planner's views of RGB views: each camera with its predicted depth (and its mask).
+///
+/// # Errors
+/// See [`sweep_depths`].
+pub fn predict_views(rgb: &[RgbView], sweep: &SweepParams) -> Result<Vec<View>> {
+    let depths = sweep_depths(rgb, sweep)?;
+    rgb.iter()
+        .zip(depths)
+        .enumerate()
+        .map(|(i, (view, depth))| {
+            let k = view.camera.intrinsics;
+            let mut planned = View::new(i, view.camera, DepthImage::new(k, depth.depth_m)?)?;
+            if let Some(mask) = &view.mask {
+                planned = planned.with_mask(Mask::new(k.width, k.height, mask.clone())?)?;
+            }
+            Ok(planned)
+        })
+        .collect()
+}
+
+/// What [`plan_on_rgb_dir`] found: the plan on the predicted depth, and the prediction's time.
+#[derive(Clone, Debug)]
+pub struct RgbPlanReport {
+    /// The plan, as on a depth camera's views (its views hold the predicted depth).
+    pub plan: ViewsPlanReport,
+    /// Seconds spent predicting depth.
+    pub depth_s: f64,
+}
+
+/// Plans on the RGB views of `dir`: depth predicted by the baseline, then [`plan_on_views`].
+///
+/// # Errors
+/// See [`read_rgb_dir`], [`sweep_depths`] and [`plan_on_views`].
+pub fn plan_on_rgb_dir(
+    policy: &GqcnnPolicy,
+    gripper: &mvgrasp_grasp::Gripper,
+    dir: &Path,
+    params: &SensorPlanParams,
+    sweep: &SweepParams,
+) -> Result<RgbPlanReport> {
+    let rgb = read_rgb_dir(dir)?;
+    let started = Instant::now();
+    let views = predict_views(&rgb, sweep)?;
+    let depth_s = started.elapsed().as_secs_f64();
+    Ok(RgbPlanReport {
+        plan: plan_on_views(policy, gripper, views, params)?,
+        depth_s,
+    })
+}
