@@ -1,7 +1,7 @@
 //! NumPy arrays to Rust values and back: meshes, camera matrices, poses. Every error names the
 //! argument and what was expected.
 
-use mvgrasp_geometry::{Intrinsics, Pose3, TriangleMesh, Vec3, pose_from_rows};
+use mvgrasp_geometry::{Intrinsics, Pose3, TriangleMesh, Vec3, pose_as_matrix};
 use numpy::ndarray::Array2;
 use numpy::{AllowTypeChange, IntoPyArray, PyArray1, PyArray2, PyArrayLike2, PyArrayMethods};
 use numpy::{PyReadonlyArray2, PyReadonlyArrayDyn};
@@ -143,8 +143,9 @@ pub(crate) fn pose_of(name: &str, pose: &PyReadonlyArray2<'_, f64>) -> PyResult<
             p.shape()
         )));
     }
-    let rows = std::array::from_fn(|i| std::array::from_fn(|j| p[[i, j]]));
-    pose_from_rows(rows).map_err(|e| PyValueError::new_err(format!("{name}: {e}")))
+    // Through f32, as a JSON file's pose is read: the same values give the same bits.
+    let rows = std::array::from_fn(|i| std::array::from_fn(|j| p[[i, j]] as f32));
+    pose_as_matrix::from_rows(rows).map_err(|e| PyValueError::new_err(format!("{name}: {e}")))
 }
 
 /// A pose as a float64 4x4 array (rows).
@@ -175,8 +176,9 @@ pub(crate) fn poses_of(name: &str, poses: &PyReadonlyArrayDyn<'_, f64>) -> PyRes
     (0..batch)
         .map(|i| {
             let m = &values[16 * i..16 * i + 16];
-            let rows = std::array::from_fn(|r| std::array::from_fn(|c| m[4 * r + c]));
-            pose_from_rows(rows).map_err(|e| PyValueError::new_err(format!("{name}[{i}]: {e}")))
+            let rows = std::array::from_fn(|r| std::array::from_fn(|c| m[4 * r + c] as f32));
+            pose_as_matrix::from_rows(rows)
+                .map_err(|e| PyValueError::new_err(format!("{name}[{i}]: {e}")))
         })
         .collect()
 }

@@ -4,11 +4,14 @@
 
 use mvgrasp::grasps_file::{GraspsFile, WorldFrame};
 use mvgrasp::planner::{
-    DepthImage, Mask, PlanOptions, View, plan_grasp, plan_on_view, plan_on_views,
+    DepthImage, Mask, PlanOptions, View, plan_grasp, plan_on_view, plan_on_views, predict_views,
 };
+use mvgrasp::stereo::{RgbView, SweepParams};
 use mvgrasp_geometry::{Camera, Pose3};
 use mvgrasp_infer::Gqcnn;
-use numpy::{AllowTypeChange, PyArrayLike2, PyReadonlyArray2, PyReadonlyArrayDyn};
+use numpy::{
+    AllowTypeChange, PyArrayLike2, PyReadonlyArray2, PyReadonlyArray3, PyReadonlyArrayDyn,
+};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyString;
@@ -269,4 +272,91 @@ pub(crate) fn plan_mesh<'py>(
     )?;
     result.set_item("grasps_json", file.to_json().map_err(pipeline_error)?)?;
     Ok(result)
+}
+
+/// Plans a grasp on RGB views, as `plan --rgb` does: each view's depth predicted from the
+/// others by the plane-sweep baseline (`depth_from="baseline"`; the Learnt Stereo Machine is not
+/// shipped yet), then the multi-view planner. `images`: per view an `(H, W, 3)` uint8 image;
+/// `ks`, `world_from_cameras`: their cameras, posed in the table frame (z up, the table at
+/// z = 0); `masks`: per view the object's pixels or `None`. Returns `grasps.json`'s content
+/// (with `as_json`, its text).
+#[pyfunction]
+#[pyo3(signature = (images, ks, world_from_cameras, *, masks = None, model = None, depth_from = "baseline", cem = false, hand_check = true, seed = 0, as_json = false))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn plan_rgb<'py>(
+    py: Python<'py>,
+    images: Vec<PyReadonlyArray3<'py, u8>>,
+    ks: Vec<PyReadonlyArray2<'py, f64>>,
+    world_from_cameras: Vec<PyReadonlyArray2<'py, f64>>,
+    masks: Option<Vec<Option<PyReadonlyArray2<'py, bool>>>>,
+    model: Option<&str>,
+    depth_from: &str,
+    cem: bool,
+    hand_check: bool,
+    seed: u64,
+    as_json: bool,
+) -> PyResult<Bound<'py, PyAny>> {
+    if depth_from != "baseline" {
+        return Err(PyValueError::new_err(format!(
+            "depth_from: {depth_from:?}, expected \"baseline\" (the Learnt Stereo Machine is not \
+             shipped yet)"
+        )));
+    }
+    let n = images.len();
+    if n < 2
+        || ks.len() != n
+        || world_from_cameras.len() != n
+        || masks.as_ref().is_some_and(|m| m.len() != n)
+    {
+        return Err(PyValueError::new_err(format!(
+            "images, ks, world_from_cameras (and masks): one per view and at least 2 views, got \
+             {n}, {}, {}",
+            ks.len(),
+            world_from_cameras.len()
+        )));
+    }
+    let mut views = Vec::with_capacity(n);
+    for i in 0..n {
+        let image = images[i].as_array();
+        let [h, w, 3] = *image.shape() else {
+            return Err(PyValueError::new_err(format!(
+                "images[{i}]: shape {:?}, expected (H, W, 3)",
+                image.shape()
+            )));
+        };
+        let (w, h) = (w as u32, h as u32);
+        let camera = Camera {
+            intrinsics: intrinsics_of(&format!("ks[{i}]"), &ks[i], w, h)?,
+            world_from_camera: pose_of(
+                &format!("world_from_cameras[{i}]"),
+                &world_from_cameras[i],
+            )?,
+        };
+        let rgb = image
+            .rows()
+            .into_iter()
+            .map(|p| [p[0], p[1], p[2]])
+            .collect();
+        let mask = match masks.as_ref().and_then(|m| m[i].as_ref()) {
+            Some(m) => Some(mask_of(&format!("masks[{i}]"), m, w, h)?),
+            None => None,
+        };
+        views.push(RgbView { camera, rgb, mask });
+    }
+    let options = options(true, cem, hand_check, seed);
+    let net = network(model, &options)?;
+    let file = py.detach(|| -> mvgrasp::Result<GraspsFile> {
+        let (policy, gripper, params) = options.on_depth(net)?;
+        let predicted = predict_views(&views, &SweepParams::default())?;
+        let report = plan_on_views(&policy, &gripper, predicted, &params)?;
+        let cameras: Vec<Camera> = report.views.iter().map(|v| v.camera).collect();
+        Ok(GraspsFile::new(
+            WorldFrame::Given,
+            &cameras,
+            &report.top,
+            report.rejections,
+            report.tables.first().copied(),
+        ))
+    });
+    grasps_output(py, &file.map_err(pipeline_error)?, as_json)
 }

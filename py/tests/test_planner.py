@@ -120,3 +120,29 @@ def test_cameras_project_and_unproject() -> None:
     assert np.allclose(top.depth_to_points(depth)[:, 2], 0.0, atol=1e-5)
     with pytest.raises(ValueError, match="points: shape"):
         camera.project(np.zeros((2, 2)))
+
+
+def test_planning_on_rgb_views_writes_the_cli_grasps_json_byte_for_byte(tmp_path: Path) -> None:
+    from matplotlib.image import imread
+
+    mvgrasp.generate_rgbd_dataset(tmp_path / "data", categories=["box"])
+    folder = tmp_path / "data" / "box_000" / "test"
+    plan_cli("--rgb", str(folder), "--out", str(tmp_path / "cli"))
+    cameras = [mvgrasp.Camera.from_dict(c)
+               for c in json.loads((folder / "cameras.json").read_text())]  # fmt: skip
+    images = [np.rint(imread(folder / f"{i:03}_rgb.png") * 255).astype(np.uint8)
+              for i in range(len(cameras))]  # fmt: skip
+    masks = [np.rint(imread(folder / f"{i:03}_mask.png") * 255) == 1
+             for i in range(len(cameras))]  # fmt: skip
+    result = mvgrasp.Planner().plan_rgb(images, cameras, masks=masks)
+    assert result.grasps_json.encode() == (tmp_path / "cli" / "grasps.json").read_bytes()
+    assert result.frame == "given" and len(result.views) == 10
+    assert result.best is not None and result.best.view_quality is not None
+    with pytest.raises(ValueError, match="depth_from"):
+        mvgrasp.Planner().plan_rgb(images, cameras, depth_from="lsm")
+    with pytest.raises(ValueError, match="at least 2 views"):
+        mvgrasp.Planner().plan_rgb(images[:1], cameras[:1])
+    with pytest.raises(ValueError, match=r"images\[0\]: shape"):
+        mvgrasp.Planner().plan_rgb([images[0][..., :2], images[1]], cameras[:2])
+    with pytest.raises(TypeError, match="images"):  # grey: not (H, W, 3)
+        mvgrasp.Planner().plan_rgb([images[0][..., 0], images[1]], cameras[:2])

@@ -454,3 +454,21 @@ def generate_rgbd_dataset(
     """Renders the multi-view RGB-D dataset into ``out`` as ``render`` does (the same bytes):
     per object its training and novel test views, finished objects skipped; returns
     ``{"written", "skipped", "views"}``."""
+
+def plan_rgb(
+    images: Sequence[npt.NDArray[np.uint8]],
+    ks: Sequence[npt.NDArray[np.float64]],
+    world_from_cameras: Sequence[npt.NDArray[np.float64]],
+    *,
+    masks: Sequence[npt.NDArray[np.bool_] | None] | None = None,
+    model: str | None = None,
+    depth_from: str = "baseline",
+    cem: bool = False,
+    hand_check: bool = True,
+    seed: int = 0,
+    as_json: bool = False,
+) -> Any:
+    """Plans a grasp on RGB views as ``plan --rgb`` does: depth predicted by the plane-sweep
+    baseline, then the multi-view planner. ``images``: ``(H, W, 3)`` uint8 per view, with their
+    3x3 camera matrices and 4x4 poses in the table frame; ``masks``: the object's pixels or
+    ``None`` per view. Returns ``grasps.json``'s content (with ``as_json``, its text)."""

@@ -238,6 +238,35 @@ class Planner:
         )
         return PlanResult._of(text, {"total_s": time.perf_counter() - started})
 
+    def plan_rgb(
+        self,
+        images: Sequence[npt.ArrayLike],
+        cameras: Sequence[Camera],
+        *,
+        masks: Optional[Sequence[Optional[npt.ArrayLike]]] = None,
+        depth_from: str = "baseline",
+    ) -> PlanResult:
+        """Plans on RGB views (``(H, W, 3)`` uint8, at least two) with their posed cameras (the
+        table frame: z up, the table at z = 0), as ``plan --rgb`` does: each view's depth
+        predicted from the others (``depth_from="baseline"``: silhouette carving and a plane
+        sweep; the Learnt Stereo Machine is not shipped yet), then the multi-view planner
+        (``fuse`` is implied). ``masks``: per view the object's pixels, or ``None``."""
+        started = time.perf_counter()
+        options = self._options()
+        options.pop("fuse")
+        text = _native.plan_rgb(
+            [np.ascontiguousarray(i, dtype=np.uint8) for i in images],
+            [_f64(c.k) for c in cameras],
+            [_f64(c.world_from_camera) for c in cameras],
+            masks=None
+            if masks is None
+            else [None if m is None else np.asarray(m, dtype=bool) for m in masks],
+            depth_from=depth_from,
+            as_json=True,
+            **options,
+        )
+        return PlanResult._of(text, {"total_s": time.perf_counter() - started})
+
     def plan_mesh(
         self,
         vertices: npt.ArrayLike,
