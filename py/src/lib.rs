@@ -55,7 +55,7 @@ mod native {
     #[pymodule_export]
     use crate::planning::{plan_depth, plan_mesh, plan_rgb, plan_views};
     #[pymodule_export]
-    use crate::render::{generate_rgbd_dataset, random_colors, render};
+    use crate::render::{generate_rgbd_dataset, random_colors, read_rgbd_folder, render};
 
     #[pymodule_init]
     fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {

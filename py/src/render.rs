@@ -7,7 +7,7 @@ use mvgrasp::convert::render_view;
 use mvgrasp::dataset::{DatasetConfig, SceneData, TABLE_HALF_SIDE_M, write_dataset};
 use mvgrasp::render::{Backend, Colors, Renderer};
 use mvgrasp_geometry::{Camera, Intrinsics, IntrinsicsPreset, Pose3};
-use numpy::{AllowTypeChange, PyArray1, PyArrayLike2, PyArrayMethods, PyReadonlyArray2};
+use numpy::{AllowTypeChange, PyArray1, PyArray2, PyArrayLike2, PyArrayMethods, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -189,4 +189,67 @@ pub(crate) fn generate_rgbd_dataset<'py>(
     dict.set_item("skipped", summary.skipped)?;
     dict.set_item("views", summary.views)?;
     Ok(dict)
+}
+
+/// One folder of an RGB-D dataset (`render`'s `OBJECT/train` or `OBJECT/test`, or any folder
+/// of that layout) read back through the Rust readers `plan --rgb` and `plan --views-dir` use:
+/// a dict of `rgb` (V, H, W, 3) uint8, `depth` (V, H, W) float32 metres (0: nothing), `mask`
+/// (V, H, W) bool (the object's pixels; `None` without masks), `k` (V, 3, 3) and
+/// `world_from_camera` (V, 4, 4) float64. Raises `mvgrasp.DatasetError` naming the file.
+#[pyfunction]
+pub(crate) fn read_rgbd_folder(
+    py: Python<'_>,
+    dir: std::path::PathBuf,
+) -> PyResult<Bound<'_, PyDict>> {
+    let (rgb, depth) = py
+        .detach(|| -> mvgrasp::Result<_> {
+            Ok((
+                mvgrasp::planner::read_rgb_dir(&dir)?,
+                mvgrasp::planner::read_views_dir(&dir)?,
+            ))
+        })
+        // Whatever the reader's kind of error (a file of the folder): the dataset's.
+        .map_err(|e| crate::errors::DatasetError::new_err(e.to_string()))?;
+    let (v, first) = (rgb.len(), &rgb[0].camera.intrinsics);
+    let (w, h) = (first.width as usize, first.height as usize);
+    if rgb.iter().any(|view| {
+        (view.camera.intrinsics.width, view.camera.intrinsics.height) != (first.width, first.height)
+    }) {
+        return Err(crate::errors::DatasetError::new_err(format!(
+            "{}: the views are not all {w} x {h} pixels",
+            dir.display()
+        )));
+    }
+    let out = PyDict::new(py);
+    let pixels: Vec<u8> = rgb
+        .iter()
+        .flat_map(|view| view.rgb.iter().flatten().copied())
+        .collect();
+    out.set_item("rgb", PyArray1::from_vec(py, pixels).reshape([v, h, w, 3])?)?;
+    let values: Vec<f32> = depth
+        .iter()
+        .flat_map(|view| view.depth.as_slice().iter().copied())
+        .collect();
+    out.set_item("depth", PyArray1::from_vec(py, values).reshape([v, h, w])?)?;
+    if rgb.iter().all(|view| view.mask.is_some()) {
+        let masks: Vec<bool> = rgb
+            .iter()
+            .flat_map(|view| view.mask.iter().flatten().copied())
+            .collect();
+        out.set_item("mask", PyArray1::from_vec(py, masks).reshape([v, h, w])?)?;
+    } else {
+        out.set_item("mask", py.None())?;
+    }
+    let ks: Vec<Bound<'_, PyArray2<f64>>> = rgb
+        .iter()
+        .map(|view| crate::arrays::k_array(py, &view.camera.intrinsics))
+        .collect();
+    let poses: Vec<Bound<'_, PyArray2<f64>>> = rgb
+        .iter()
+        .map(|view| crate::arrays::pose_array(py, &view.camera.world_from_camera))
+        .collect();
+    let numpy = py.import("numpy")?;
+    out.set_item("k", numpy.call_method1("stack", (ks,))?)?;
+    out.set_item("world_from_camera", numpy.call_method1("stack", (poses,))?)?;
+    Ok(out)
 }

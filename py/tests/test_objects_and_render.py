@@ -194,6 +194,19 @@ def test_the_rgbd_dataset_from_python_is_the_cli_dataset_byte_for_byte(tmp_path:
             assert (tmp_path / "cli" / path).read_bytes() == (
                 tmp_path / "python" / path
             ).read_bytes(), path
+    # Read back through the Rust readers: the files' pixels, depth in metres, the cameras.
+    folder = mvgrasp.read_rgbd_folder(tmp_path / "python" / "can_000" / "test")
+    assert folder["rgb"].shape == (10, 386, 516, 3) and folder["rgb"].dtype == np.uint8
+    assert np.array_equal(folder["rgb"][3], read_png(tmp_path / "python" / "can_000" / "test" / "003_rgb.png"))
+    depth_png = read_png(tmp_path / "python" / "can_000" / "test" / "003_depth.png")
+    assert np.allclose(folder["depth"][3], depth_png / 10000.0, atol=1e-6)
+    mask_png = read_png(tmp_path / "python" / "can_000" / "test" / "003_mask.png")
+    assert np.array_equal(folder["mask"][3], mask_png == 1)
+    cameras = json.loads((tmp_path / "python" / "can_000" / "test" / "cameras.json").read_text())
+    assert folder["k"][0, 0, 0] == pytest.approx(cameras[0]["intrinsics"]["fx"])
+    assert np.allclose(folder["world_from_camera"][5], cameras[5]["world_from_camera"], atol=1e-6)
+    with pytest.raises(mvgrasp.DatasetError, match="cameras.json"):
+        mvgrasp.read_rgbd_folder(tmp_path / "python" / "can_000")
     again = mvgrasp.generate_rgbd_dataset(tmp_path / "python", categories=["can"], seed=3)
     assert again == {"written": 0, "skipped": 1, "views": 0}
     with pytest.raises(mvgrasp.CameraError, match="kinect"):

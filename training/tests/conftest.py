@@ -35,3 +35,22 @@ def generate_grasp_dataset(root: Path, config_toml: str, categories: list[str]) 
         check=True,
     )
     return data
+
+
+def generate_rgbd_dataset(root: Path, categories: list[str]) -> Path:
+    """An RGB-D dataset (``render``'s) of built-in objects made by the wheel into ``root``, in
+    its own process for the reason :func:`generate_grasp_dataset` gives."""
+    if importlib.util.find_spec("mvgrasp") is None:
+        pytest.skip("the mvgrasp wheel is not installed")
+    subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            "import sys, mvgrasp; "
+            "mvgrasp.generate_rgbd_dataset(sys.argv[1], categories=sys.argv[2].split(','))",
+            str(root),
+            ",".join(categories),
+        ],
+        check=True,
+    )
+    return root

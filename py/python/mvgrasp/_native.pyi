@@ -472,3 +472,8 @@ def plan_rgb(
     baseline, then the multi-view planner. ``images``: ``(H, W, 3)`` uint8 per view, with their
     3x3 camera matrices and 4x4 poses in the table frame; ``masks``: the object's pixels or
     ``None`` per view. Returns ``grasps.json``'s content (with ``as_json``, its text)."""
+
+def read_rgbd_folder(dir: str | os.PathLike[str]) -> dict[str, Any]:
+    """One RGB-D dataset folder (``OBJECT/train`` or ``OBJECT/test``) read back by the Rust
+    readers: ``rgb`` (V, H, W, 3) uint8, ``depth`` (V, H, W) float32 metres, ``mask``
+    (V, H, W) bool or ``None``, ``k`` (V, 3, 3), ``world_from_camera`` (V, 4, 4)."""

@@ -1,0 +1,276 @@
+"""Training the depth Learnt Stereo Machine on an mvgrasp RGB-D dataset (``render`` output).
+
+    python -m mvgrasp_training.train_lsm CONFIG.toml --out DIR
+
+The dataset is read through the wheel (``mvgrasp.read_rgbd_folder``: the Rust readers of
+``plan --rgb``). Every object's training and test views are held in memory at the
+architecture's resolution (images area-averaged, depth and masks by nearest pixel, the cameras'
+``K`` scaled to match). A sample is one object and ``views_per_sample`` of its views from one
+split (colours are consistent within a split, not across): from the test split its top-down
+view (the first) and random others, as the seed paper trains; from the training split random
+views. Objects are split object-wise (``data.val_fraction`` held out, by the seed). The loss is
+L1 on depth over the pixels whose true depth lies inside the grid's depth range, in every input
+view. Adam; a checkpoint after every epoch (``DIR/checkpoint.pt``; a rerun resumes from it), the
+weights of the epoch with the lowest validation error on the object pixels kept
+(``DIR/best.pt``), and the learning curve in ``DIR/history.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+from torch.nn import functional as F
+
+import mvgrasp
+from mvgrasp_training.config import (
+    _AT_LEAST_ONE,
+    _FRACTION,
+    _NON_NEGATIVE,
+    _NOT_EMPTY,
+    _POSITIVE,
+    _checked,
+    _Validated,
+    load_config,
+)
+from mvgrasp_training.lsm import LSM, LsmArchitecture, ray_depths, scale_intrinsics
+
+
+@dataclass(frozen=True)
+class LsmDataConfig(_Validated):
+    """The RGB-D dataset and its split."""
+
+    dataset_dir: Path
+    """A ``render`` output folder; relative paths are relative to the config file's folder."""
+    val_fraction: float = _checked(_FRACTION, default=0.1)
+    """The fraction of objects held out for validation."""
+    views_per_sample: int = _checked((lambda v: v >= 2, ">= 2"), default=4)
+    """Views in one input (the paper: the top-down view and 3 more)."""
+
+
+@dataclass(frozen=True)
+class LsmTrainConfig(_Validated):
+    """The optimisation schedule."""
+
+    epochs: int = _checked(_AT_LEAST_ONE)
+    samples_per_epoch: int = _checked(_AT_LEAST_ONE)
+    batch_size: int = _checked(_AT_LEAST_ONE)
+    learning_rate: float = _checked(_POSITIVE)
+    threads: int = _checked(_NON_NEGATIVE, default=0)
+    """torch intra-op threads (0: torch's default)."""
+
+
+@dataclass(frozen=True)
+class LsmModelConfig(_Validated):
+    """The architecture's sizes (see :class:`LsmArchitecture`)."""
+
+    image_width: int = _checked(_AT_LEAST_ONE, default=128)
+    image_height: int = _checked(_AT_LEAST_ONE, default=96)
+    features: int = _checked(_AT_LEAST_ONE, default=16)
+    grid_size: int = _checked((lambda v: v >= 4 and v % 2 == 0, "even and >= 4"), default=24)
+    grid_side_m: float = _checked(_POSITIVE, default=0.3)
+    gru_channels: int = _checked(_AT_LEAST_ONE, default=24)
+    ray_samples: int = _checked((lambda v: v >= 2, ">= 2"), default=24)
+
+    def architecture(self) -> LsmArchitecture:
+        return LsmArchitecture(**asdict(self))
+
+
+@dataclass(frozen=True)
+class LsmExperimentConfig(_Validated):
+    """One LSM training run."""
+
+    name: str = _checked(_NOT_EMPTY)
+    seed: int = _checked(_NON_NEGATIVE)
+    data: LsmDataConfig
+    train: LsmTrainConfig
+    model: LsmModelConfig = field(default_factory=LsmModelConfig)
+
+
+@dataclass
+class Split:
+    """One object's views of one split, at the architecture's resolution."""
+
+    rgb: torch.Tensor  # (V, 3, H, W) in [0, 1]
+    depth: torch.Tensor  # (V, H, W) metres, 0: nothing
+    mask: torch.Tensor  # (V, H, W) bool, the object's pixels
+    k: torch.Tensor  # (V, 3, 3)
+    camera_from_world: torch.Tensor  # (V, 4, 4)
+    top_down_first: bool
+
+
+def load_split(folder: Path, arch: LsmArchitecture) -> Split:
+    """One dataset folder through the wheel, resized for ``arch``."""
+    data = mvgrasp.read_rgbd_folder(folder)
+    rgb = torch.from_numpy(data["rgb"]).permute(0, 3, 1, 2).float() / 255.0
+    h, w = rgb.shape[-2:]
+    size = (arch.image_height, arch.image_width)
+    rgb = F.interpolate(rgb, size=size, mode="area")
+    depth = F.interpolate(torch.from_numpy(data["depth"])[:, None], size=size, mode="nearest")[:, 0]
+    mask = data["mask"]
+    mask = (
+        torch.ones_like(depth, dtype=torch.bool)
+        if mask is None
+        else F.interpolate(torch.from_numpy(mask)[:, None].float(), size=size, mode="nearest")[
+            :, 0
+        ].bool()
+    )
+    k = scale_intrinsics(torch.from_numpy(data["k"]), arch.image_width / w, arch.image_height / h)
+    camera_from_world = torch.linalg.inv(torch.from_numpy(data["world_from_camera"]))
+    return Split(rgb, depth, mask, k.float(), camera_from_world.float(), folder.name == "test")
+
+
+def load_dataset(root: Path, arch: LsmArchitecture) -> list[tuple[str, list[Split]]]:
+    """Every object of a ``render`` dataset: (name, [its splits])."""
+    manifest = json.loads((root / "dataset.json").read_text())
+    objects = []
+    for name in manifest["objects"]:
+        splits = [load_split(root / name / split, arch) for split in ("train", "test")]
+        objects.append((name, splits))
+    return objects
+
+
+def draw(splits: list[Split], views: int, rng: np.random.Generator) -> tuple[torch.Tensor, ...]:
+    """One input: a split of the object, its top-down view (test split) and random others."""
+    split = splits[rng.integers(len(splits))]
+    count = split.rgb.shape[0]
+    if split.top_down_first:
+        chosen = [0, *(1 + rng.choice(count - 1, size=views - 1, replace=False))]
+    else:
+        chosen = list(rng.choice(count, size=views, replace=False))
+    index = torch.tensor(chosen)
+    return (
+        split.rgb[index],
+        split.depth[index],
+        split.mask[index],
+        split.k[index],
+        split.camera_from_world[index],
+    )
+
+
+def batch(
+    objects: list[tuple[str, list[Split]]], size: int, views: int, rng: np.random.Generator
+) -> tuple[torch.Tensor, ...]:
+    drawn = [draw(objects[rng.integers(len(objects))][1], views, rng) for _ in range(size)]
+    return tuple(torch.stack(parts) for parts in zip(*drawn))
+
+
+def valid_pixels(
+    depth: torch.Tensor, camera_from_world: torch.Tensor, arch: LsmArchitecture
+) -> torch.Tensor:
+    """Pixels whose true depth lies inside the grid's depth range (B, V, H, W)."""
+    b, v = depth.shape[:2]
+    flat = camera_from_world.reshape(b * v, 4, 4)
+    from mvgrasp_training.lsm import grid_centre
+
+    centre = grid_centre(camera_from_world).repeat_interleave(v, dim=0)
+    depths, _ = ray_depths(flat, centre, arch.grid_side_m, 2)
+    lo, hi = depths[:, 0].reshape(b, v, 1, 1), depths[:, 1].reshape(b, v, 1, 1)
+    return (depth > lo) & (depth < hi)
+
+
+def evaluate(
+    net: LSM, objects: list[tuple[str, list[Split]]], views: int, seed: int
+) -> dict[str, float]:
+    """Mean absolute depth error on the object pixels and on all valid pixels, millimetres,
+    over a fixed draw of inputs (the same for every epoch)."""
+    rng = np.random.default_rng(seed)
+    errors = {"object_mm": [0.0, 0], "all_mm": [0.0, 0]}
+    net.eval()
+    with torch.no_grad():
+        for _ in range(max(len(objects), 1) * 2):
+            rgb, depth, mask, k, pose = batch(objects, 1, views, rng)
+            predicted = net(rgb, k, pose)
+            valid = valid_pixels(depth, pose, net.arch)
+            error = (predicted - depth).abs() * 1e3
+            for key, where in (("object_mm", valid & mask), ("all_mm", valid)):
+                errors[key][0] += float(error[where].sum())
+                errors[key][1] += int(where.sum())
+    net.train()
+    return {key: total / max(count, 1) for key, (total, count) in errors.items()}
+
+
+def train(config: LsmExperimentConfig, out: Path, log=print) -> dict[str, float]:
+    """Trains (resuming from ``out/checkpoint.pt`` when there is one); the best validation
+    figures."""
+    out.mkdir(parents=True, exist_ok=True)
+    if config.train.threads:
+        torch.set_num_threads(config.train.threads)
+    arch = config.model.architecture()
+    objects = load_dataset(config.data.dataset_dir, arch)
+    rng = np.random.default_rng(config.seed)
+    order = rng.permutation(len(objects))
+    held = max(1, round(config.data.val_fraction * len(objects))) if config.data.val_fraction else 0
+    val = [objects[i] for i in order[:held]]
+    train_objects = [objects[i] for i in order[held:]]
+    torch.manual_seed(config.seed)
+    net = LSM(arch)
+    optimiser = torch.optim.Adam(net.parameters(), lr=config.train.learning_rate)
+    history: list[dict[str, float]] = []
+    start_epoch = 0
+    best = float("inf")
+    checkpoint = out / "checkpoint.pt"
+    if checkpoint.is_file():
+        state = torch.load(checkpoint, weights_only=False)
+        net.load_state_dict(state["model"])
+        optimiser.load_state_dict(state["optimiser"])
+        history = state["history"]
+        start_epoch = state["epoch"] + 1
+        best = state["best"]
+        log(f"resumed after epoch {start_epoch}")
+    views = config.data.views_per_sample
+    steps = max(1, config.train.samples_per_epoch // config.train.batch_size)
+    for epoch in range(start_epoch, config.train.epochs):
+        started = time.time()
+        epoch_rng = np.random.default_rng([config.seed, epoch])
+        total = 0.0
+        for _ in range(steps):
+            rgb, depth, mask, k, pose = batch(train_objects, config.train.batch_size, views, epoch_rng)
+            valid = valid_pixels(depth, pose, arch)
+            loss = (net(rgb, k, pose) - depth).abs()[valid].mean()
+            optimiser.zero_grad()
+            loss.backward()
+            optimiser.step()
+            total += float(loss)
+        figures = evaluate(net, val, views, config.seed) if val else {}
+        record = {"epoch": epoch, "train_l1_mm": 1e3 * total / steps, **figures}
+        record["seconds"] = time.time() - started
+        history.append(record)
+        log(json.dumps(record))
+        score = figures.get("object_mm", record["train_l1_mm"])
+        if score < best:
+            best = score
+            torch.save({"model": net.state_dict(), "arch": asdict(arch), "epoch": epoch}, out / "best.pt")
+        torch.save(
+            {
+                "model": net.state_dict(),
+                "optimiser": optimiser.state_dict(),
+                "history": history,
+                "epoch": epoch,
+                "best": best,
+            },
+            checkpoint,
+        )
+        (out / "history.json").write_text(json.dumps(history, indent=2) + "\n")
+    return {"best_object_mm": best, "epochs": len(history)}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("config", type=Path)
+    parser.add_argument("--out", type=Path, required=True)
+    args = parser.parse_args(argv)
+    config = load_config(args.config, LsmExperimentConfig)
+    result = train(config, args.out, log=lambda line: print(line, flush=True))
+    print(json.dumps(result))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
