@@ -21,7 +21,7 @@ import argparse
 import json
 import sys
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
@@ -29,68 +29,8 @@ import torch
 from torch.nn import functional as F
 
 import mvgrasp
-from mvgrasp_training.config import (
-    _AT_LEAST_ONE,
-    _FRACTION,
-    _NON_NEGATIVE,
-    _NOT_EMPTY,
-    _POSITIVE,
-    _checked,
-    _Validated,
-    load_config,
-)
+from mvgrasp_training.config import LsmExperimentConfig, load_config
 from mvgrasp_training.lsm import LSM, LsmArchitecture, ray_depths, scale_intrinsics
-
-
-@dataclass(frozen=True)
-class LsmDataConfig(_Validated):
-    """The RGB-D dataset and its split."""
-
-    dataset_dir: Path
-    """A ``render`` output folder; relative paths are relative to the config file's folder."""
-    val_fraction: float = _checked(_FRACTION, default=0.1)
-    """The fraction of objects held out for validation."""
-    views_per_sample: int = _checked((lambda v: v >= 2, ">= 2"), default=4)
-    """Views in one input (the paper: the top-down view and 3 more)."""
-
-
-@dataclass(frozen=True)
-class LsmTrainConfig(_Validated):
-    """The optimisation schedule."""
-
-    epochs: int = _checked(_AT_LEAST_ONE)
-    samples_per_epoch: int = _checked(_AT_LEAST_ONE)
-    batch_size: int = _checked(_AT_LEAST_ONE)
-    learning_rate: float = _checked(_POSITIVE)
-    threads: int = _checked(_NON_NEGATIVE, default=0)
-    """torch intra-op threads (0: torch's default)."""
-
-
-@dataclass(frozen=True)
-class LsmModelConfig(_Validated):
-    """The architecture's sizes (see :class:`LsmArchitecture`)."""
-
-    image_width: int = _checked(_AT_LEAST_ONE, default=128)
-    image_height: int = _checked(_AT_LEAST_ONE, default=96)
-    features: int = _checked(_AT_LEAST_ONE, default=16)
-    grid_size: int = _checked((lambda v: v >= 4 and v % 2 == 0, "even and >= 4"), default=24)
-    grid_side_m: float = _checked(_POSITIVE, default=0.3)
-    gru_channels: int = _checked(_AT_LEAST_ONE, default=24)
-    ray_samples: int = _checked((lambda v: v >= 2, ">= 2"), default=24)
-
-    def architecture(self) -> LsmArchitecture:
-        return LsmArchitecture(**asdict(self))
-
-
-@dataclass(frozen=True)
-class LsmExperimentConfig(_Validated):
-    """One LSM training run."""
-
-    name: str = _checked(_NOT_EMPTY)
-    seed: int = _checked(_NON_NEGATIVE)
-    data: LsmDataConfig
-    train: LsmTrainConfig
-    model: LsmModelConfig = field(default_factory=LsmModelConfig)
 
 
 @dataclass

@@ -11,12 +11,8 @@ import pytest
 torch = pytest.importorskip("torch")
 
 from conftest import generate_rgbd_dataset  # noqa: E402
-from mvgrasp_training.config import ConfigError, load_config  # noqa: E402
-from mvgrasp_training.train_lsm import (  # noqa: E402
-    LsmExperimentConfig,
-    load_dataset,
-    train,
-)
+from mvgrasp_training.config import ConfigError, LsmExperimentConfig, load_config  # noqa: E402
+from mvgrasp_training.train_lsm import load_dataset, train  # noqa: E402
 
 CONFIG = """name = "lsm_tiny"
 seed = 1
