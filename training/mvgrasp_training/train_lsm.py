@@ -177,7 +177,7 @@ def train(config: LsmExperimentConfig, out: Path, log=print) -> dict[str, float]
             optimiser.zero_grad()
             loss.backward()
             optimiser.step()
-            total += float(loss)
+            total += loss.item()
         figures = evaluate(net, val, views, config.seed) if val else {}
         record = {"epoch": epoch, "train_l1_mm": 1e3 * total / steps, **figures}
         record["seconds"] = time.time() - started
