@@ -53,7 +53,7 @@ mod native {
         builtin_object, mass_properties, mesh_from_arrays, object_categories, stable_poses,
     };
     #[pymodule_export]
-    use crate::planning::{plan_depth, plan_mesh, plan_rgb, plan_views};
+    use crate::planning::{plan_depth, plan_mesh, plan_rgb, plan_views, predict_depth};
     #[pymodule_export]
     use crate::render::{generate_rgbd_dataset, random_colors, read_rgbd_folder, render};
 

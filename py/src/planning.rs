@@ -6,11 +6,12 @@ use mvgrasp::grasps_file::{GraspsFile, WorldFrame};
 use mvgrasp::planner::{
     DepthImage, Mask, PlanOptions, View, plan_grasp, plan_on_view, plan_on_views, predict_views,
 };
-use mvgrasp::stereo::{RgbView, SweepParams};
+use mvgrasp::stereo::{RgbView, SweepParams, sweep_depths};
 use mvgrasp_geometry::{Camera, Pose3};
 use mvgrasp_infer::Gqcnn;
 use numpy::{
-    AllowTypeChange, PyArrayLike2, PyReadonlyArray2, PyReadonlyArray3, PyReadonlyArrayDyn,
+    AllowTypeChange, PyArray1, PyArrayLike2, PyArrayMethods, PyReadonlyArray2, PyReadonlyArray3,
+    PyReadonlyArrayDyn,
 };
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -274,39 +275,19 @@ pub(crate) fn plan_mesh<'py>(
     Ok(result)
 }
 
-/// Plans a grasp on RGB views, as `plan --rgb` does: each view's depth predicted from the
-/// others by the plane-sweep baseline (`depth_from="baseline"`; the Learnt Stereo Machine is not
-/// shipped yet), then the multi-view planner. `images`: per view an `(H, W, 3)` uint8 image;
-/// `ks`, `world_from_cameras`: their cameras, posed in the table frame (z up, the table at
-/// z = 0); `masks`: per view the object's pixels or `None`. Returns `grasps.json`'s content
-/// (with `as_json`, its text).
-#[pyfunction]
-#[pyo3(signature = (images, ks, world_from_cameras, *, masks = None, model = None, depth_from = "baseline", cem = false, hand_check = true, seed = 0, as_json = false))]
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn plan_rgb<'py>(
-    py: Python<'py>,
-    images: Vec<PyReadonlyArray3<'py, u8>>,
-    ks: Vec<PyReadonlyArray2<'py, f64>>,
-    world_from_cameras: Vec<PyReadonlyArray2<'py, f64>>,
-    masks: Option<Vec<Option<PyReadonlyArray2<'py, bool>>>>,
-    model: Option<&str>,
-    depth_from: &str,
-    cem: bool,
-    hand_check: bool,
-    seed: u64,
-    as_json: bool,
-) -> PyResult<Bound<'py, PyAny>> {
-    if depth_from != "baseline" {
-        return Err(PyValueError::new_err(format!(
-            "depth_from: {depth_from:?}, expected \"baseline\" (the Learnt Stereo Machine is not \
-             shipped yet)"
-        )));
-    }
+/// The RGB views of `plan_rgb` and `predict_depth`: per view an `(H, W, 3)` uint8 image, its
+/// 3x3 camera matrix, its pose and optionally its mask; at least two views.
+fn rgb_views(
+    images: &[PyReadonlyArray3<'_, u8>],
+    ks: &[PyReadonlyArray2<'_, f64>],
+    world_from_cameras: &[PyReadonlyArray2<'_, f64>],
+    masks: Option<&Vec<Option<PyReadonlyArray2<'_, bool>>>>,
+) -> PyResult<Vec<RgbView>> {
     let n = images.len();
     if n < 2
         || ks.len() != n
         || world_from_cameras.len() != n
-        || masks.as_ref().is_some_and(|m| m.len() != n)
+        || masks.is_some_and(|m| m.len() != n)
     {
         return Err(PyValueError::new_err(format!(
             "images, ks, world_from_cameras (and masks): one per view and at least 2 views, got \
@@ -337,12 +318,39 @@ pub(crate) fn plan_rgb<'py>(
             .into_iter()
             .map(|p| [p[0], p[1], p[2]])
             .collect();
-        let mask = match masks.as_ref().and_then(|m| m[i].as_ref()) {
+        let mask = match masks.and_then(|m| m[i].as_ref()) {
             Some(m) => Some(mask_of(&format!("masks[{i}]"), m, w, h)?),
             None => None,
         };
         views.push(RgbView { camera, rgb, mask });
     }
+    Ok(views)
+}
+
+/// Plans a grasp on RGB views, as `plan --rgb` does: each view's depth predicted from the
+/// others by the plane-sweep baseline (`depth_from="baseline"`; the Learnt Stereo Machine is not
+/// shipped yet), then the multi-view planner. `images`: per view an `(H, W, 3)` uint8 image;
+/// `ks`, `world_from_cameras`: their cameras, posed in the table frame (z up, the table at
+/// z = 0); `masks`: per view the object's pixels or `None`. Returns `grasps.json`'s content
+/// (with `as_json`, its text).
+#[pyfunction]
+#[pyo3(signature = (images, ks, world_from_cameras, *, masks = None, model = None, depth_from = "baseline", cem = false, hand_check = true, seed = 0, as_json = false))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn plan_rgb<'py>(
+    py: Python<'py>,
+    images: Vec<PyReadonlyArray3<'py, u8>>,
+    ks: Vec<PyReadonlyArray2<'py, f64>>,
+    world_from_cameras: Vec<PyReadonlyArray2<'py, f64>>,
+    masks: Option<Vec<Option<PyReadonlyArray2<'py, bool>>>>,
+    model: Option<&str>,
+    depth_from: &str,
+    cem: bool,
+    hand_check: bool,
+    seed: u64,
+    as_json: bool,
+) -> PyResult<Bound<'py, PyAny>> {
+    check_depth_from(depth_from)?;
+    let views = rgb_views(&images, &ks, &world_from_cameras, masks.as_ref())?;
     let options = options(true, cem, hand_check, seed);
     let net = network(model, &options)?;
     let file = py.detach(|| -> mvgrasp::Result<GraspsFile> {
@@ -359,4 +367,54 @@ pub(crate) fn plan_rgb<'py>(
         ))
     });
     grasps_output(py, &file.map_err(pipeline_error)?, as_json)
+}
+
+/// Each RGB view's depth predicted from the others (`depth_from="baseline"`: silhouette
+/// carving and a plane sweep, `mvgrasp::stereo`), as `plan --rgb` predicts it: a `(V, H, W)`
+/// float32 array, metres along each optical axis, 0 where unknown. The inputs are
+/// `plan_rgb`'s.
+#[pyfunction]
+#[pyo3(signature = (images, ks, world_from_cameras, *, masks = None, depth_from = "baseline"))]
+pub(crate) fn predict_depth<'py>(
+    py: Python<'py>,
+    images: Vec<PyReadonlyArray3<'py, u8>>,
+    ks: Vec<PyReadonlyArray2<'py, f64>>,
+    world_from_cameras: Vec<PyReadonlyArray2<'py, f64>>,
+    masks: Option<Vec<Option<PyReadonlyArray2<'py, bool>>>>,
+    depth_from: &str,
+) -> PyResult<Bound<'py, PyAny>> {
+    check_depth_from(depth_from)?;
+    let views = rgb_views(&images, &ks, &world_from_cameras, masks.as_ref())?;
+    let (w, h) = (
+        views[0].camera.intrinsics.width as usize,
+        views[0].camera.intrinsics.height as usize,
+    );
+    if views.iter().any(|v| {
+        (
+            v.camera.intrinsics.width as usize,
+            v.camera.intrinsics.height as usize,
+        ) != (w, h)
+    }) {
+        return Err(PyValueError::new_err(
+            "images: views of different sizes (one array holds them all)",
+        ));
+    }
+    let depths = py
+        .detach(|| sweep_depths(&views, &SweepParams::default()))
+        .map_err(pipeline_error)?;
+    let values: Vec<f32> = depths.into_iter().flat_map(|d| d.depth_m).collect();
+    Ok(PyArray1::from_vec(py, values)
+        .reshape([views.len(), h, w])?
+        .into_any())
+}
+
+/// The depth predictor a `depth_from` argument names: only the baseline today.
+fn check_depth_from(depth_from: &str) -> PyResult<()> {
+    if depth_from == "baseline" {
+        return Ok(());
+    }
+    Err(PyValueError::new_err(format!(
+        "depth_from: {depth_from:?}, expected \"baseline\" (the Learnt Stereo Machine is not \
+         shipped yet)"
+    )))
 }

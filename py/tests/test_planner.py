@@ -135,6 +135,14 @@ def test_planning_on_rgb_views_writes_the_cli_grasps_json_byte_for_byte(tmp_path
     masks = [np.rint(imread(folder / f"{i:03}_mask.png") * 255) == 1
              for i in range(len(cameras))]  # fmt: skip
     result = mvgrasp.Planner().plan_rgb(images, cameras, masks=masks)
+    # The depth it planned on: the top-down view's box to a millimetre (median).
+    depth = mvgrasp.predict_depth(images[:5], [c.k for c in cameras[:5]],
+                                  [c.world_from_camera for c in cameras[:5]], masks=masks[:5])  # fmt: skip
+    truth = mvgrasp.read_rgbd_folder(folder)["depth"][0]
+    assert depth.shape == (5, 386, 516) and depth.dtype == np.float32
+    on_box = masks[0] & (depth[0] > 0)
+    assert on_box.sum() > 0.8 * masks[0].sum()
+    assert np.median(np.abs(depth[0][on_box] - truth[on_box])) < 1e-3
     assert result.grasps_json.encode() == (tmp_path / "cli" / "grasps.json").read_bytes()
     assert result.frame == "given" and len(result.views) == 10
     assert result.best is not None and result.best.view_quality is not None

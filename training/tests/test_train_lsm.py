@@ -75,6 +75,22 @@ def test_training_writes_its_curve_and_resumes_from_its_checkpoint(dataset: Path
     assert json.loads((out / "history.json").read_text())[0] == history[0]
 
 
+def test_the_evaluation_prints_both_methods_on_the_same_views(
+    dataset: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from mvgrasp_training.evaluate_lsm import main
+
+    config = load_config(write_config(tmp_path / "e.toml", dataset, 1), LsmExperimentConfig)
+    train(config, tmp_path / "run", log=lambda _: None)
+    assert main([str(tmp_path / "run" / "best.pt"), str(dataset), "--views", "3"]) == 0
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| LSM")
+            or line.startswith("| baseline")]  # fmt: skip
+    assert len(rows) == 4
+    for row in rows:
+        mae = float(row.split("|")[4])
+        assert 0 < mae < 300, row
+
+
 def test_bad_configs_name_the_key(dataset: Path, tmp_path: Path) -> None:
     path = write_config(tmp_path / "bad.toml", dataset, 1)
     path.write_text(path.read_text().replace("grid_size = 8", "grid_size = 7"))

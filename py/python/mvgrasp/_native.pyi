@@ -477,3 +477,14 @@ def read_rgbd_folder(dir: str | os.PathLike[str]) -> dict[str, Any]:
     """One RGB-D dataset folder (``OBJECT/train`` or ``OBJECT/test``) read back by the Rust
     readers: ``rgb`` (V, H, W, 3) uint8, ``depth`` (V, H, W) float32 metres, ``mask``
     (V, H, W) bool or ``None``, ``k`` (V, 3, 3), ``world_from_camera`` (V, 4, 4)."""
+
+def predict_depth(
+    images: Sequence[npt.NDArray[np.uint8]],
+    ks: Sequence[npt.NDArray[np.float64]],
+    world_from_cameras: Sequence[npt.NDArray[np.float64]],
+    *,
+    masks: Sequence[npt.NDArray[np.bool_] | None] | None = None,
+    depth_from: str = "baseline",
+) -> npt.NDArray[np.float32]:
+    """Each RGB view's depth predicted from the others as ``plan --rgb`` predicts it: (V, H, W)
+    float32 metres, 0 where unknown. The inputs are ``plan_rgb``'s."""
