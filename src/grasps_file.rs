@@ -22,6 +22,7 @@ use crate::convert::row_major;
 use crate::dataset::images::write_png8;
 use crate::error::{Error, Result};
 use crate::grasp_image::GRASP_COLORS;
+use crate::planner::{PlanReport, SensorPlanReport, ViewsPlanReport};
 
 /// The `format` of `grasps.json`.
 pub const GRASPS_FORMAT: &str = "mvgrasp-grasps/1";
@@ -153,6 +154,46 @@ impl GraspsFile {
             rejections,
             table,
         }
+    }
+
+    /// The file of a plan on one sensor depth image (`plan --depth`): its frame the given
+    /// camera pose's world, or the table fitted in the image when the pose was estimated.
+    pub fn of_sensor(report: &SensorPlanReport) -> Self {
+        let frame = if report.pose_estimated {
+            WorldFrame::Estimated
+        } else {
+            WorldFrame::Given
+        };
+        Self::new(
+            frame,
+            &[report.view.camera],
+            &report.top,
+            report.rejections,
+            Some(report.table),
+        )
+    }
+
+    /// The file of a plan over posed views (`plan --views-dir`, `plan --rgb`).
+    pub fn of_views(report: &ViewsPlanReport) -> Self {
+        let cameras: Vec<Camera> = report.views.iter().map(|v| v.camera).collect();
+        Self::new(
+            WorldFrame::Given,
+            &cameras,
+            &report.top,
+            report.rejections,
+            report.tables.first().copied(),
+        )
+    }
+
+    /// The file of a plan on a rendered scene (`plan` on a mesh).
+    pub fn of_rendered(report: &PlanReport) -> Self {
+        Self::new(
+            WorldFrame::Rendered,
+            &report.cameras,
+            &report.top,
+            report.rejections,
+            None,
+        )
     }
 
     /// The file as pretty JSON.

@@ -101,8 +101,9 @@ pub fn sweep_depths(views: &[RgbView], params: &SweepParams) -> Result<Vec<Swept
     let smoothed: Vec<RgbView> = views
         .par_iter()
         .map(|view| RgbView {
+            camera: view.camera,
             rgb: smooth(&view.rgb, &view.camera),
-            ..view.clone()
+            mask: view.mask.clone(),
         })
         .collect();
     (0..views.len())
@@ -165,12 +166,12 @@ fn check(views: &[RgbView], params: &SweepParams) -> Result<()> {
         }
     }
     if params.planes < 2
-        || params.best_views == 0
+        || !(1..=MAX_BEST_VIEWS).contains(&params.best_views)
         || !(params.max_height_m > 0.0 && params.max_cost > 0.0)
     {
         return bad(format!(
-            "parameters {params:?}: need 2 or more planes, 1 or more best views, a positive \
-             height and cost"
+            "parameters {params:?}: need 2 or more planes, 1 to {MAX_BEST_VIEWS} best views, a \
+             positive height and cost"
         ));
     }
     Ok(())
@@ -212,32 +213,51 @@ struct Target<'a> {
 }
 
 impl Target<'_> {
-    /// The colour where world point `p` projects (bilinear), and whether it lies inside the
-    /// mask (true without one); `None` outside the image or behind the camera.
-    fn sample(&self, p: Vec3) -> Option<([f32; 3], bool)> {
+    /// Where world point `p` projects, `None` outside the image or behind the camera.
+    fn locate(&self, p: Vec3) -> Option<Pixel> {
         let k = &self.view.camera.intrinsics;
-        let c = self.camera_from_world.transform_point(p);
-        let [u, v] = k.project(c)?;
+        let [u, v] = k.project(self.camera_from_world.transform_point(p))?;
         let (w, h) = (k.width as usize, k.height as usize);
         if !(u >= 0.0 && v >= 0.0 && u <= (w - 1) as f32 && v <= (h - 1) as f32) {
             return None;
         }
         let (u0, v0) = (u.floor() as usize, v.floor() as usize);
-        let (u1, v1) = ((u0 + 1).min(w - 1), (v0 + 1).min(h - 1));
-        let (fu, fv) = (u - u0 as f32, v - v0 as f32);
-        let at = |x: usize, y: usize| self.view.rgb[y * w + x].map(f32::from);
-        let (a, b, c2, d) = (at(u0, v0), at(u1, v0), at(u0, v1), at(u1, v1));
-        let colour = std::array::from_fn(|ch| {
-            (a[ch] * (1.0 - fu) + b[ch] * fu) * (1.0 - fv) + (c2[ch] * (1.0 - fu) + d[ch] * fu) * fv
-        });
-        // Inside when any of the four pixels around the point is the object's: a surface
-        // point on the silhouette may fall a fraction of a pixel outside the mask.
-        let inside =
-            self.view.mask.as_ref().is_none_or(|m| {
-                m[v0 * w + u0] || m[v0 * w + u1] || m[v1 * w + u0] || m[v1 * w + u1]
-            });
-        Some((colour, inside))
+        Some(Pixel {
+            corners: [
+                v0 * w + u0,
+                v0 * w + (u0 + 1).min(w - 1),
+                (v0 + 1).min(h - 1) * w + u0,
+                (v0 + 1).min(h - 1) * w + (u0 + 1).min(w - 1),
+            ],
+            fraction: (u - u0 as f32, v - v0 as f32),
+        })
     }
+
+    /// Whether a located point lies inside the mask (true without one): when any of the four
+    /// pixels around it is the object's, as a surface point on the silhouette may fall a
+    /// fraction of a pixel outside the mask.
+    fn inside(&self, at: &Pixel) -> bool {
+        self.view
+            .mask
+            .as_ref()
+            .is_none_or(|m| at.corners.iter().any(|&i| m[i]))
+    }
+
+    /// The colour at a located point, bilinear.
+    fn colour(&self, at: &Pixel) -> [f32; 3] {
+        let [a, b, c, d] = at.corners.map(|i| self.view.rgb[i].map(f32::from));
+        let (fu, fv) = at.fraction;
+        std::array::from_fn(|ch| {
+            (a[ch] * (1.0 - fu) + b[ch] * fu) * (1.0 - fv) + (c[ch] * (1.0 - fu) + d[ch] * fu) * fv
+        })
+    }
+}
+
+/// A point located in a view's image: its four surrounding pixels (indices: top-left,
+/// top-right, bottom-left, bottom-right, clamped at the border) and its offset from the first.
+struct Pixel {
+    corners: [usize; 4],
+    fraction: (f32, f32),
 }
 
 /// The pixels a reference view sweeps: its mask's bounding box grown by the window (the whole
@@ -323,11 +343,7 @@ fn sweep_view(views: &[RgbView], r: usize, params: &SweepParams) -> SweptDepth {
     if reference.mask.is_some() {
         let coarse = inverse_depth_planes(near, far, COARSE_PLANES);
         let inside: Vec<usize> = (0..COARSE_PLANES)
-            .filter(|&p| {
-                plane_costs(reference, &rays, &targets, coarse[p], sweep_box, best_views)
-                    .iter()
-                    .any(|c| c.is_finite())
-            })
+            .filter(|&p| plane_meets_hull(reference, &rays, &targets, coarse[p], sweep_box))
             .collect();
         let (Some(&first), Some(&last)) = (inside.first(), inside.last()) else {
             return SweptDepth { depth_m, hull_m };
@@ -420,49 +436,94 @@ fn refine(planes: &[f32], plane: usize, cost: f32, left: f32, right: f32) -> f32
     1.0 / (inv + offset * step)
 }
 
+/// The most views a pixel's cost averages ([`SweepParams::best_views`]).
+const MAX_BEST_VIEWS: usize = 8;
+
+/// The world point of box pixel `i` on the plane at depth `d`, if it is an object pixel of the
+/// reference view (every pixel without a mask), with its index in the image.
+fn box_point(
+    reference: &RgbView,
+    rays: &Rays,
+    d: f32,
+    (bu0, bv0, bw, _): (usize, usize, usize, usize),
+    i: usize,
+) -> Option<(usize, Vec3)> {
+    let w = reference.camera.intrinsics.width as usize;
+    let image = (i / bw + bv0) * w + (i % bw + bu0);
+    // Off the object in its own view: not on the hull.
+    let object = reference.mask.as_ref().is_none_or(|m| m[image]);
+    object.then(|| (image, rays.origin + rays.ray[image] * d))
+}
+
+/// Whether the plane at depth `d` meets the visual hull at some box pixel: its point inside the
+/// mask of every other view that sees it, and seen by one at least.
+fn plane_meets_hull(
+    reference: &RgbView,
+    rays: &Rays,
+    targets: &[Target<'_>],
+    d: f32,
+    area: (usize, usize, usize, usize),
+) -> bool {
+    (0..area.2 * area.3).into_par_iter().any(|i| {
+        box_point(reference, rays, d, area, i).is_some_and(|(_, point)| {
+            let mut seen = false;
+            for target in targets {
+                if let Some(at) = target.locate(point) {
+                    if !target.inside(&at) {
+                        return false;
+                    }
+                    seen = true;
+                }
+            }
+            seen
+        })
+    })
+}
+
 /// Each box pixel's cost on the plane at depth `d` ([`RULED_OUT`] when the point leaves a
-/// mask or no other view sees it).
+/// mask or no other view sees it): the mean of its `best_views` smallest costs in the other
+/// views.
 fn plane_costs(
     reference: &RgbView,
     rays: &Rays,
     targets: &[Target<'_>],
     d: f32,
-    (bu0, bv0, bw, bh): (usize, usize, usize, usize),
+    area: (usize, usize, usize, usize),
     best_views: usize,
 ) -> Vec<f32> {
-    let w = reference.camera.intrinsics.width as usize;
-    (0..bw * bh)
+    (0..area.2 * area.3)
         .into_par_iter()
         .with_min_len(512)
         .map(|i| {
-            let image = (i / bw + bv0) * w + (i % bw + bu0);
-            if reference.mask.as_ref().is_some_and(|m| !m[image]) {
-                return RULED_OUT; // off the object in its own view: not on the hull
-            }
-            let point = rays.origin + rays.ray[image] * d;
+            let Some((image, point)) = box_point(reference, rays, d, area, i) else {
+                return RULED_OUT;
+            };
             let own = reference.rgb[image].map(f32::from);
-            let mut costs = [f32::INFINITY; 16];
+            // The smallest costs so far, ascending.
+            let mut best = [f32::INFINITY; MAX_BEST_VIEWS];
             let mut seen = 0;
             for target in targets {
-                let Some((colour, inside)) = target.sample(point) else {
+                let Some(at) = target.locate(point) else {
                     continue;
                 };
-                if !inside {
+                if !target.inside(&at) {
                     return RULED_OUT;
                 }
+                let colour = target.colour(&at);
                 let cost = (0..3).map(|c| (colour[c] - own[c]).abs()).sum::<f32>() / 3.0;
-                if seen < costs.len() {
-                    costs[seen] = cost;
-                    seen += 1;
+                seen += 1;
+                let kept = &mut best[..best_views];
+                if cost < kept[best_views - 1] {
+                    let at = kept.partition_point(|&c| c <= cost);
+                    kept[at..].rotate_right(1);
+                    kept[at] = cost;
                 }
             }
             if seen == 0 {
                 return RULED_OUT;
             }
-            let costs = &mut costs[..seen];
-            costs.sort_unstable_by(f32::total_cmp);
             let k = best_views.min(seen);
-            costs[..k].iter().sum::<f32>() / k as f32
+            best[..k].iter().sum::<f32>() / k as f32
         })
         .collect()
 }
@@ -634,6 +695,12 @@ mod tests {
     fn one_view_or_a_wrong_size_is_refused() {
         let (mut views, _) = views(2);
         assert!(sweep_depths(&views[..1], &SweepParams::default()).is_err());
+        let too_many = SweepParams {
+            best_views: MAX_BEST_VIEWS + 1,
+            ..SweepParams::default()
+        };
+        let message = sweep_depths(&views, &too_many).unwrap_err().to_string();
+        assert!(message.contains("best views"), "{message}");
         views[1].rgb.pop();
         let message = sweep_depths(&views, &SweepParams::default())
             .unwrap_err()

@@ -102,13 +102,7 @@ pub(crate) fn depth_to_points<'py>(
     world_from_camera: Option<PyReadonlyArray2<'py, f64>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let (width, height, values) = crate::arrays::depth_of("depth", &depth)?;
-    let camera = Camera {
-        intrinsics: intrinsics_of("k", &k, width, height)?,
-        world_from_camera: match world_from_camera {
-            Some(pose) => pose_of("world_from_camera", &pose)?,
-            None => Pose3::IDENTITY,
-        },
-    };
+    let camera = camera_of(&k, width, height, world_from_camera.as_ref())?;
     let points = py
         .detach(|| camera.depth_to_world_points(&values))
         .map_err(|e| PyValueError::new_err(format!("depth: {e}")))?;

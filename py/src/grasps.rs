@@ -6,11 +6,10 @@
 use mvgrasp::grasp::physics::{PhysicsObject, simulate_grasp};
 use mvgrasp::grasp::quality::{grasp_quality as quality_of, robust_qualities};
 use mvgrasp::grasp::{
-    Grasp, GraspObject, Gripper, GripperPreset, check_collision as collision_of, sample_antipodal,
+    Grasp, GraspObject, Gripper, check_collision as collision_of, sample_antipodal,
 };
 use mvgrasp::grasp_dataset::GraspDatasetConfig;
 use numpy::{AllowTypeChange, PyArrayLike2, PyReadonlyArray2, PyReadonlyArrayDyn};
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use serde::Serialize;
 use serde::de::DeserializeOwned;
@@ -33,16 +32,7 @@ fn gripper_of(spec: Option<&Bound<'_, PyAny>>) -> PyResult<Gripper> {
             .map_err(pipeline_error);
     };
     let gripper = if let Ok(name) = spec.extract::<std::path::PathBuf>() {
-        match name.to_str().map(str::parse::<GripperPreset>) {
-            Some(Ok(preset)) => Gripper::preset(preset),
-            _ if name.exists() => Gripper::from_file(&name).map_err(grasp_error)?,
-            _ => {
-                return Err(PyValueError::new_err(format!(
-                    "gripper: {name:?} is neither a preset (panda, yumi, robotiq_2f_85) nor a \
-                     gripper file that exists"
-                )));
-            }
-        }
+        Gripper::from_name_or_file(&name.to_string_lossy()).map_err(grasp_error)?
     } else {
         from_python::<Gripper>("gripper", spec, &Gripper::default())?
     };

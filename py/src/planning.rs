@@ -2,9 +2,10 @@
 //! the ranked grasps, as `plan --depth ... --json` and `plan --views-dir ... --json` print them
 //! (`grasps.json`).
 
-use mvgrasp::grasps_file::{GraspsFile, WorldFrame};
+use mvgrasp::grasps_file::GraspsFile;
 use mvgrasp::planner::{
-    DepthImage, Mask, PlanOptions, View, plan_grasp, plan_on_view, plan_on_views, predict_views,
+    DepthFrom, DepthImage, Mask, PlanOptions, View, plan_grasp, plan_on_rgb_views, plan_on_view,
+    plan_on_views,
 };
 use mvgrasp::stereo::{RgbView, SweepParams, sweep_depths};
 use mvgrasp_geometry::{Camera, Pose3};
@@ -23,7 +24,7 @@ use crate::errors::{camera_error, pipeline_error};
 use crate::networks::load_model;
 use crate::render::{backend_of, renderer};
 
-/// A mask's pixels, which must be the depth's size.
+/// A mask's pixels, which must be its image's size.
 fn mask_of(
     name: &str,
     mask: &PyReadonlyArray2<'_, bool>,
@@ -33,11 +34,25 @@ fn mask_of(
     let m = mask.as_array();
     if m.shape() != [height as usize, width as usize] {
         return Err(PyValueError::new_err(format!(
-            "{name}: shape {:?}, expected the depth's ({height}, {width})",
+            "{name}: shape {:?}, expected the image's ({height}, {width})",
             m.shape()
         )));
     }
     Ok(m.iter().copied().collect())
+}
+
+/// Refuses lists of per-view inputs of different lengths (`names` and their lengths, the
+/// first the views'), or fewer than `min` views.
+fn one_per_view(names: &str, lengths: &[usize], min: usize) -> PyResult<()> {
+    let n = lengths[0];
+    if n >= min && lengths.iter().all(|&l| l == n) {
+        return Ok(());
+    }
+    let got: Vec<String> = lengths.iter().map(usize::to_string).collect();
+    Err(PyValueError::new_err(format!(
+        "{names}: one per view and at least {min} view(s), got {}",
+        got.join(", ")
+    )))
 }
 
 /// `grasps.json`'s content as a dict, or with `as_json` its text, byte for byte what `plan
@@ -118,18 +133,7 @@ pub(crate) fn plan_depth<'py>(
             view = view.with_mask(Mask::new(w, h, pixels)?)?;
         }
         let report = plan_on_view(&policy, &gripper, view, pose.is_some(), &params)?;
-        let frame = if pose.is_some() {
-            WorldFrame::Given
-        } else {
-            WorldFrame::Estimated
-        };
-        Ok(GraspsFile::new(
-            frame,
-            &[report.view.camera],
-            &report.top,
-            report.rejections,
-            Some(report.table),
-        ))
+        Ok(GraspsFile::of_sensor(&report))
     });
     grasps_output(py, &file.map_err(pipeline_error)?, as_json)
 }
@@ -160,20 +164,9 @@ pub(crate) fn plan_views<'py>(
     as_json: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let n = depths.len();
-    if n == 0
-        || ks.len() != n
-        || world_from_cameras.len() != n
-        || masks.as_ref().is_some_and(|m| m.len() != n)
-    {
-        return Err(PyValueError::new_err(format!(
-            "depths, ks, world_from_cameras (and masks): one per view, got {n}, {}, {}{}",
-            ks.len(),
-            world_from_cameras.len(),
-            masks
-                .as_ref()
-                .map_or(String::new(), |m| format!(", {}", m.len()))
-        )));
-    }
+    let mut lengths = vec![n, ks.len(), world_from_cameras.len()];
+    lengths.extend(masks.as_ref().map(Vec::len));
+    one_per_view("depths, ks, world_from_cameras (and masks)", &lengths, 1)?;
     let mut inputs = Vec::with_capacity(n);
     for i in 0..n {
         let (w, h, values) = depth_of(&format!("depths[{i}]"), &depths[i])?;
@@ -201,15 +194,9 @@ pub(crate) fn plan_views<'py>(
             }
             views.push(view);
         }
-        let report = plan_on_views(&policy, &gripper, views, &params)?;
-        let cameras: Vec<Camera> = report.views.iter().map(|v| v.camera).collect();
-        Ok(GraspsFile::new(
-            WorldFrame::Given,
-            &cameras,
-            &report.top,
-            report.rejections,
-            report.tables.first().copied(),
-        ))
+        Ok(GraspsFile::of_views(&plan_on_views(
+            &policy, &gripper, views, &params,
+        )?))
     });
     grasps_output(py, &file.map_err(pipeline_error)?, as_json)
 }
@@ -256,13 +243,7 @@ pub(crate) fn plan_mesh<'py>(
             plan_grasp(&renderer, &mesh, &policy, &params)
         })
         .map_err(pipeline_error)?;
-    let file = GraspsFile::new(
-        WorldFrame::Rendered,
-        &report.cameras,
-        &report.top,
-        report.rejections,
-        None,
-    );
+    let file = GraspsFile::of_rendered(&report);
     let t = report.timings;
     let timings = serde_json::json!({
         "render_s": t.render_s, "fuse_s": t.fuse_s, "plan_s": t.plan_s, "check_s": t.check_s,
@@ -284,18 +265,9 @@ fn rgb_views(
     masks: Option<&Vec<Option<PyReadonlyArray2<'_, bool>>>>,
 ) -> PyResult<Vec<RgbView>> {
     let n = images.len();
-    if n < 2
-        || ks.len() != n
-        || world_from_cameras.len() != n
-        || masks.is_some_and(|m| m.len() != n)
-    {
-        return Err(PyValueError::new_err(format!(
-            "images, ks, world_from_cameras (and masks): one per view and at least 2 views, got \
-             {n}, {}, {}",
-            ks.len(),
-            world_from_cameras.len()
-        )));
-    }
+    let mut lengths = vec![n, ks.len(), world_from_cameras.len()];
+    lengths.extend(masks.map(Vec::len));
+    one_per_view("images, ks, world_from_cameras (and masks)", &lengths, 2)?;
     let mut views = Vec::with_capacity(n);
     for i in 0..n {
         let image = images[i].as_array();
@@ -349,22 +321,15 @@ pub(crate) fn plan_rgb<'py>(
     seed: u64,
     as_json: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
-    check_depth_from(depth_from)?;
+    let DepthFrom::Baseline = depth_from_of(depth_from)?;
     let views = rgb_views(&images, &ks, &world_from_cameras, masks.as_ref())?;
     let options = options(true, cem, hand_check, seed);
     let net = network(model, &options)?;
     let file = py.detach(|| -> mvgrasp::Result<GraspsFile> {
         let (policy, gripper, params) = options.on_depth(net)?;
-        let predicted = predict_views(&views, &SweepParams::default())?;
-        let report = plan_on_views(&policy, &gripper, predicted, &params)?;
-        let cameras: Vec<Camera> = report.views.iter().map(|v| v.camera).collect();
-        Ok(GraspsFile::new(
-            WorldFrame::Given,
-            &cameras,
-            &report.top,
-            report.rejections,
-            report.tables.first().copied(),
-        ))
+        let report =
+            plan_on_rgb_views(&policy, &gripper, &views, &params, &SweepParams::default())?;
+        Ok(GraspsFile::of_views(&report.plan))
     });
     grasps_output(py, &file.map_err(pipeline_error)?, as_json)
 }
@@ -383,7 +348,7 @@ pub(crate) fn predict_depth<'py>(
     masks: Option<Vec<Option<PyReadonlyArray2<'py, bool>>>>,
     depth_from: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
-    check_depth_from(depth_from)?;
+    let DepthFrom::Baseline = depth_from_of(depth_from)?;
     let views = rgb_views(&images, &ks, &world_from_cameras, masks.as_ref())?;
     let (w, h) = (
         views[0].camera.intrinsics.width as usize,
@@ -408,13 +373,9 @@ pub(crate) fn predict_depth<'py>(
         .into_any())
 }
 
-/// The depth predictor a `depth_from` argument names: only the baseline today.
-fn check_depth_from(depth_from: &str) -> PyResult<()> {
-    if depth_from == "baseline" {
-        return Ok(());
-    }
-    Err(PyValueError::new_err(format!(
-        "depth_from: {depth_from:?}, expected \"baseline\" (the Learnt Stereo Machine is not \
-         shipped yet)"
-    )))
+/// The depth predictor a `depth_from` argument names.
+fn depth_from_of(depth_from: &str) -> PyResult<DepthFrom> {
+    depth_from
+        .parse()
+        .map_err(|e| PyValueError::new_err(format!("depth_from: {e}")))
 }

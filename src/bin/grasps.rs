@@ -5,7 +5,7 @@
 //! cargo run --release --bin grasps -- [--mesh PATH | --category C --index I] [--n 100]
 //!     [--gripper panda|yumi|robotiq_2f_85|FILE] [--pose K] [--physics-trials N] [--out DIR]
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -13,7 +13,7 @@ use clap::Parser;
 use mvgrasp::cli::ObjectArgs;
 use mvgrasp::geometry::RestingPoses;
 use mvgrasp::grasp::physics::PhysicsParams;
-use mvgrasp::grasp::{AnalysisConfig, GraspObject, Gripper, GripperPreset, analyse};
+use mvgrasp::grasp::{AnalysisConfig, GraspObject, Gripper, analyse};
 use mvgrasp::grasp_image::write_grasp_picture;
 use serde::Serialize;
 
@@ -53,11 +53,7 @@ fn main() -> ExitCode {
 }
 
 fn load_gripper(spec: &str) -> Result<Gripper, String> {
-    match spec.parse::<GripperPreset>() {
-        Ok(preset) => Ok(Gripper::preset(preset)),
-        Err(_) if Path::new(spec).exists() => Gripper::from_file(spec).map_err(|e| e.to_string()),
-        Err(e) => Err(format!("--gripper: {e}, or a gripper file that exists")),
-    }
+    Gripper::from_name_or_file(spec).map_err(|e| format!("--gripper: {e}"))
 }
 
 fn load_config(args: &Args) -> Result<AnalysisConfig, String> {

@@ -20,13 +20,13 @@ use std::process::ExitCode;
 use clap::Parser;
 use mvgrasp::cli::ObjectArgs;
 use mvgrasp::geometry::{Intrinsics, IntrinsicsPreset};
-use mvgrasp::grasps_file::{GraspsFile, WorldFrame, write_overlay};
+use mvgrasp::grasps_file::{GraspsFile, write_overlay};
 use mvgrasp::infer::Gqcnn;
 use mvgrasp::mcap_log::write_plan_log;
 use mvgrasp::planner::{
-    GqcnnPolicy, ObjectSource, PlanOptions, PlanReport, ScoredGrasp, SensorFiles, SensorPlanParams,
-    SensorPlanReport, View, models, plan_grasp, plan_on_rgb_dir, plan_on_sensor_depth,
-    plan_on_views_dir,
+    DepthFrom, GqcnnPolicy, ObjectSource, PlanOptions, PlanReport, ScoredGrasp, SensorFiles,
+    SensorPlanParams, SensorPlanReport, View, models, plan_grasp, plan_on_rgb_dir,
+    plan_on_sensor_depth, plan_on_views_dir,
 };
 use mvgrasp::render::{Backend, Renderer};
 use mvgrasp::stereo::SweepParams;
@@ -110,7 +110,7 @@ struct Args {
     rgb: Option<PathBuf>,
     /// With --rgb, how depth is predicted: `baseline`, the classical plane sweep inside the
     /// masks' visual hull (the Learnt Stereo Machine is not shipped yet).
-    #[arg(long, default_value = "baseline")]
+    #[arg(long, default_value = "baseline", requires = "rgb")]
     depth_from: String,
     /// Write `grasps.json` (the ranked grasps with their poses; README, "grasps.json") and, for
     /// sensor depth, a picture of the best grasps over each view (`overlay_N.png`) and an MCAP
@@ -210,14 +210,7 @@ fn run(args: &Args) -> Result<bool, String> {
         );
     }
     if let Some(out) = &args.out {
-        let file = GraspsFile::new(
-            WorldFrame::Rendered,
-            &plan.cameras,
-            &plan.top,
-            plan.rejections,
-            None,
-        );
-        write_outputs(out, &file, &[], &[])?;
+        write_outputs(out, &GraspsFile::of_rendered(&plan), &[], &[])?;
     }
     Ok(plan.best.is_some())
 }
@@ -286,18 +279,7 @@ fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<bool, String> {
     };
     let report =
         plan_on_sensor_depth(&policy, &gripper, &files, &params).map_err(|e| e.to_string())?;
-    let frame = if files.camera_pose.is_some() {
-        WorldFrame::Given
-    } else {
-        WorldFrame::Estimated
-    };
-    let file = GraspsFile::new(
-        frame,
-        &[report.view.camera],
-        &report.top,
-        report.rejections,
-        Some(report.table),
-    );
+    let file = GraspsFile::of_sensor(&report);
     if args.json {
         println!("{}", file.to_json().map_err(|e| e.to_string())?);
     } else {
@@ -314,12 +296,10 @@ fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
     use std::fmt::Write;
     let (model_name, policy, gripper, params) = sensor_setup(args)?;
     let (report, depth) = if args.rgb.is_some() {
-        if args.depth_from != "baseline" {
-            return Err(format!(
-                "--depth-from: {:?}, expected baseline (the Learnt Stereo Machine is not shipped yet)",
-                args.depth_from
-            ));
-        }
+        let DepthFrom::Baseline = args
+            .depth_from
+            .parse::<DepthFrom>()
+            .map_err(|e| format!("--depth-from: {e}"))?;
         let rgb = plan_on_rgb_dir(&policy, &gripper, dir, &params, &SweepParams::default())
             .map_err(|e| e.to_string())?;
         let depth = format!(
@@ -332,14 +312,7 @@ fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
             plan_on_views_dir(&policy, &gripper, dir, &params).map_err(|e| e.to_string())?;
         (report, String::new())
     };
-    let cameras: Vec<_> = report.views.iter().map(|v| v.camera).collect();
-    let file = GraspsFile::new(
-        WorldFrame::Given,
-        &cameras,
-        &report.top,
-        report.rejections,
-        report.tables.first().copied(),
-    );
+    let file = GraspsFile::of_views(&report);
     if args.json {
         println!("{}", file.to_json().map_err(|e| e.to_string())?);
     } else {

@@ -5,7 +5,7 @@ use std::path::Path;
 use mvgrasp_geometry::{Intrinsics, IntrinsicsPreset};
 use mvgrasp_grasp::physics::{PhysicsObject, PhysicsParams, ShapeParams};
 use mvgrasp_grasp::quality::RobustQualityParams;
-use mvgrasp_grasp::{Gripper, GripperPreset, LabelParams, SamplingParams};
+use mvgrasp_grasp::{GraspError, Gripper, GripperPreset, LabelParams, SamplingParams};
 pub use mvgrasp_planner::CropParams;
 use serde::{Deserialize, Serialize};
 
@@ -294,16 +294,15 @@ impl GraspDatasetConfig {
     /// # Errors
     /// [`Error::ConfigValue`] when it is neither a preset nor a readable gripper file.
     pub fn gripper(&self) -> Result<Gripper> {
-        if let Ok(preset) = self.gripper.parse::<GripperPreset>() {
-            return Ok(Gripper::preset(preset));
-        }
-        if Path::new(&self.gripper).exists() {
-            return Ok(Gripper::from_file(&self.gripper)?);
-        }
-        Err(Error::ConfigValue {
-            key: "gripper",
-            value: format!("{:?}", self.gripper),
-            expected: "a preset (panda, yumi, robotiq_2f_85) or a gripper file that exists",
+        Gripper::from_name_or_file(&self.gripper).map_err(|e| match e {
+            GraspError::InvalidParameter {
+                value, expected, ..
+            } => Error::ConfigValue {
+                key: "gripper",
+                value,
+                expected,
+            },
+            other => other.into(),
         })
     }
 

@@ -17,7 +17,9 @@ pub use pipeline::{
     AnalyticCheck, PlanParams, PlanReport, PlanTimings, RgbInput, Scene, check_grasp, check_grasps,
     plan_grasp, render_rgb, render_scene,
 };
-pub use rgb::{RgbPlanReport, plan_on_rgb_dir, predict_views, read_rgb_dir};
+pub use rgb::{
+    DepthFrom, RgbPlanReport, plan_on_rgb_dir, plan_on_rgb_views, predict_views, read_rgb_dir,
+};
 pub use sensor::{
     ObjectSource, SensorFiles, SensorPlanParams, SensorPlanReport, ViewsPlanReport,
     plan_on_sensor_depth, plan_on_view, plan_on_views, plan_on_views_dir, read_view,

@@ -61,12 +61,7 @@ pub fn read_rgb_dir(dir: &Path) -> Result<Vec<RgbView>> {
                 ),
             ));
         }
-        if camera
-            .world_from_camera
-            .transform_vector(mvgrasp_geometry::Vec3::Z)
-            .z
-            >= 0.0
-        {
+        if camera.optical_axis().z >= 0.0 {
             return Err(mismatch(
                 &cameras_path,
                 format!("camera {i} looks up, away from the table (z up in the world)"),
@@ -75,13 +70,7 @@ pub fn read_rgb_dir(dir: &Path) -> Result<Vec<RgbView>> {
         let mask_path = dir.join(format!("{i:03}_mask.png"));
         let mask = if mask_path.is_file() {
             // A mask with no object pixel: the camera does not see the object.
-            let mask = read_mask_of(&mask_path, width, height, object_id)?;
-            let w = i64::from(width);
-            Some(
-                (0..i64::from(width) * i64::from(height))
-                    .map(|p| mask.at(p % w, p / w))
-                    .collect(),
-            )
+            Some(read_mask_of(&mask_path, width, height, object_id)?.into_pixels())
         } else {
             None
         };
@@ -110,6 +99,26 @@ pub fn predict_views(rgb: &[RgbView], sweep: &SweepParams) -> Result<Vec<View>> 
         .collect()
 }
 
+/// How the depth of RGB views is predicted (`plan --depth-from`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DepthFrom {
+    /// The classical baseline: silhouette carving and a plane sweep ([`crate::stereo`]).
+    Baseline,
+}
+
+impl std::str::FromStr for DepthFrom {
+    type Err = String;
+
+    fn from_str(name: &str) -> std::result::Result<Self, String> {
+        match name {
+            "baseline" => Ok(Self::Baseline),
+            other => Err(format!(
+                "{other:?}, expected baseline (the Learnt Stereo Machine is not shipped yet)"
+            )),
+        }
+    }
+}
+
 /// What [`plan_on_rgb_dir`] found: the plan on the predicted depth, and the prediction's time.
 #[derive(Clone, Debug)]
 pub struct RgbPlanReport {
@@ -119,10 +128,10 @@ pub struct RgbPlanReport {
     pub depth_s: f64,
 }
 
-/// Plans on the RGB views of `dir`: depth predicted by the baseline, then [`plan_on_views`].
+/// Plans on the RGB views of `dir` ([`read_rgb_dir`], then [`plan_on_rgb_views`]).
 ///
 /// # Errors
-/// See [`read_rgb_dir`], [`sweep_depths`] and [`plan_on_views`].
+/// See [`read_rgb_dir`] and [`plan_on_rgb_views`].
 pub fn plan_on_rgb_dir(
     policy: &GqcnnPolicy,
     gripper: &mvgrasp_grasp::Gripper,
@@ -130,9 +139,23 @@ pub fn plan_on_rgb_dir(
     params: &SensorPlanParams,
     sweep: &SweepParams,
 ) -> Result<RgbPlanReport> {
-    let rgb = read_rgb_dir(dir)?;
+    plan_on_rgb_views(policy, gripper, &read_rgb_dir(dir)?, params, sweep)
+}
+
+/// Plans on RGB views: their depth predicted by the baseline ([`predict_views`]), then
+/// [`plan_on_views`].
+///
+/// # Errors
+/// See [`sweep_depths`] and [`plan_on_views`].
+pub fn plan_on_rgb_views(
+    policy: &GqcnnPolicy,
+    gripper: &mvgrasp_grasp::Gripper,
+    rgb: &[RgbView],
+    params: &SensorPlanParams,
+    sweep: &SweepParams,
+) -> Result<RgbPlanReport> {
     let started = Instant::now();
-    let views = predict_views(&rgb, sweep)?;
+    let views = predict_views(rgb, sweep)?;
     let depth_s = started.elapsed().as_secs_f64();
     Ok(RgbPlanReport {
         plan: plan_on_views(policy, gripper, views, params)?,

@@ -171,6 +171,27 @@ impl Gripper {
         Vec3::new(0.0, 0.0, -self.finger_length_m - self.palm_size_m[2] / 2.0)
     }
 
+    /// The gripper `spec` names: a preset (`panda`, `yumi`, `robotiq_2f_85`), or else a gripper
+    /// file of that path ([`Gripper::from_file`]).
+    ///
+    /// # Errors
+    /// [`GraspError::InvalidParameter`] when `spec` is neither a preset nor a file that exists;
+    /// [`Gripper::from_file`]'s for a file it cannot use.
+    pub fn from_name_or_file(spec: &str) -> Result<Self> {
+        if let Ok(preset) = spec.parse::<GripperPreset>() {
+            return Ok(Self::preset(preset));
+        }
+        if Path::new(spec).exists() {
+            return Self::from_file(spec);
+        }
+        Err(GraspError::InvalidParameter {
+            op: "gripper",
+            name: "gripper",
+            value: format!("{spec:?}"),
+            expected: "a preset (panda, yumi, robotiq_2f_85) or a gripper file that exists",
+        })
+    }
+
     /// Reads a gripper from a file: `.toml` or `.json` with [`Gripper`]'s fields (missing ones
     /// are the Panda's), Dex-Net's `params.json` (`min_width`, `max_width`, `force_limit`,
     /// `finger_radius`; the other dimensions are the Panda's), or a `.urdf` measured with the

@@ -138,6 +138,11 @@ impl Mask {
         (v - r..=v + r).any(|y| (u - r..=u + r).any(|x| self.at(x, y)))
     }
 
+    /// Every pixel, row-major: `true` for the object's.
+    pub fn into_pixels(self) -> Vec<bool> {
+        self.pixels
+    }
+
     /// Object pixels.
     pub fn count(&self) -> usize {
         self.pixels.iter().filter(|&&p| p).count()
