@@ -50,7 +50,8 @@ fn one_per_view(names: &str, lengths: &[usize], min: usize) -> PyResult<()> {
     }
     let got: Vec<String> = lengths.iter().map(usize::to_string).collect();
     Err(PyValueError::new_err(format!(
-        "{names}: one per view and at least {min} view(s), got {}",
+        "{names}: one per view and at least {min} {}, got {}",
+        if min == 1 { "view" } else { "views" },
         got.join(", ")
     )))
 }

@@ -92,6 +92,9 @@ def test_planning_over_posed_views_with_cameras() -> None:
     result = mvgrasp.Planner(fuse=True).plan_views(list(images["depth"]), cameras)
     assert result.frame == "given" and len(result.views) == 3
     assert result.best is not None
+    unposed = mvgrasp.Camera(cameras[1].k, cameras[1].width, cameras[1].height)
+    with pytest.raises(ValueError, match=r"cameras\[1\]: no world_from_camera"):
+        mvgrasp.Planner().plan_views(list(images["depth"][:2]), [cameras[0], unposed])
     native = mvgrasp.plan_views(list(images["depth"]), [c.k for c in cameras],
                                 [c.world_from_camera for c in cameras], fuse=True)  # fmt: skip
     # The text holds float32 values in their shortest form, the dict as float64.

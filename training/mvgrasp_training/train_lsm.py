@@ -30,7 +30,7 @@ from torch.nn import functional as F
 
 import mvgrasp
 from mvgrasp_training.config import LsmExperimentConfig, load_config
-from mvgrasp_training.lsm import LSM, LsmArchitecture, ray_depths, scale_intrinsics
+from mvgrasp_training.lsm import LSM, LsmArchitecture, grid_centre, ray_depths, scale_intrinsics
 
 
 @dataclass
@@ -107,8 +107,6 @@ def valid_pixels(
     """Pixels whose true depth lies inside the grid's depth range (B, V, H, W)."""
     b, v = depth.shape[:2]
     flat = camera_from_world.reshape(b * v, 4, 4)
-    from mvgrasp_training.lsm import grid_centre
-
     centre = grid_centre(camera_from_world).repeat_interleave(v, dim=0)
     depths, _ = ray_depths(flat, centre, arch.grid_side_m, 2)
     lo, hi = depths[:, 0].reshape(b, v, 1, 1), depths[:, 1].reshape(b, v, 1, 1)

@@ -8,27 +8,25 @@ back-projection are the Rust core's.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Optional, Union
 
 import numpy as np
 import numpy.typing as npt
 
 from mvgrasp import _native
-
-
-def _f64(a: npt.ArrayLike) -> np.ndarray:
-    return np.ascontiguousarray(a, dtype=np.float64)
+from mvgrasp._arrays import f64, optional_f64
 
 
 @dataclass(frozen=True)
 class Camera:
-    """A pinhole camera with its pose."""
+    """A pinhole camera, with its pose when it is known (``world_from_camera`` ``None``: its
+    world is its own frame, and a planner fits the table to find one)."""
 
     k: np.ndarray
     width: int
     height: int
-    world_from_camera: np.ndarray = field(default_factory=lambda: np.eye(4))
+    world_from_camera: Optional[np.ndarray] = None
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> Camera:
@@ -41,7 +39,7 @@ class Camera:
             width, height = i["width"], i["height"]
         else:
             width, height = d["width"], d["height"]
-        return cls(_f64(k), int(width), int(height), _f64(d["world_from_camera"]))
+        return cls(f64(k), int(width), int(height), optional_f64(d.get("world_from_camera")))
 
     @classmethod
     def preset(
@@ -62,30 +60,28 @@ class Camera:
 
     @classmethod
     def _of(cls, i: dict[str, Any], world_from_camera: Optional[npt.ArrayLike]) -> Camera:
-        pose = np.eye(4) if world_from_camera is None else world_from_camera
-        return cls.from_dict({"intrinsics": i, "world_from_camera": pose})
+        return cls.from_dict({"intrinsics": i, "world_from_camera": world_from_camera})
 
-    def _args(self) -> tuple[np.ndarray, int, int, np.ndarray]:
-        return _f64(self.k), self.width, self.height, _f64(self.world_from_camera)
+    def _args(self) -> tuple[np.ndarray, int, int, Optional[np.ndarray]]:
+        return f64(self.k), self.width, self.height, optional_f64(self.world_from_camera)
 
     def project(self, points: npt.ArrayLike) -> np.ndarray:
         """The ``(N, 2)`` pixels (u, v) of world points ``(N, 3)``; NaN behind the camera."""
         k, w, h, pose = self._args()
-        return _native.project_points(_f64(np.atleast_2d(points)), k, w, h, pose)
+        return _native.project_points(f64(np.atleast_2d(points)), k, w, h, pose)
 
     def unproject(self, pixels: npt.ArrayLike, depths: npt.ArrayLike) -> np.ndarray:
         """The ``(N, 3)`` world points at pixels ``(N, 2)`` and depths ``(N,)`` (metres along
         the optical axis)."""
         k, w, h, pose = self._args()
         return _native.unproject_pixels(
-            _f64(np.atleast_2d(pixels)), _f64(np.atleast_1d(depths)), k, w, h, pose
+            f64(np.atleast_2d(pixels)), f64(np.atleast_1d(depths)), k, w, h, pose
         )
 
     def depth_to_points(self, depth: npt.ArrayLike) -> np.ndarray:
         """The world points of a depth image of this camera, one per valid pixel."""
-        return _native.depth_to_points(
-            np.ascontiguousarray(depth, dtype=np.float32), _f64(self.k), _f64(self.world_from_camera)
-        )
+        k, _, _, pose = self._args()
+        return _native.depth_to_points(np.ascontiguousarray(depth, dtype=np.float32), k, pose)
 
 
 def hemisphere(

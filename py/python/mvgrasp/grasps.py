@@ -24,6 +24,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mvgrasp import _native
+from mvgrasp._arrays import f64, optional_f64
 
 ArrayLike = npt.ArrayLike
 GripperSpec = Union[str, "os.PathLike[str]", dict[str, Any], None]
@@ -85,10 +86,6 @@ class Grasp:
         )
 
 
-def _pose(pose: ArrayLike) -> np.ndarray:
-    return np.ascontiguousarray(pose, dtype=np.float64)
-
-
 def _gripper(gripper: GripperSpec) -> Any:
     return os.fspath(gripper) if isinstance(gripper, os.PathLike) else gripper
 
@@ -128,7 +125,7 @@ def sample_grasps(
         triangles,
         gripper=_gripper(gripper),
         count=count,
-        table_from_object=None if table_from_object is None else _pose(table_from_object),
+        table_from_object=optional_f64(table_from_object),
         params=params,
         seed=seed,
     )
@@ -157,7 +154,7 @@ def grasp_quality(
     return _native.grasp_quality(
         vertices,
         triangles,
-        _pose(pose),
+        f64(pose),
         gripper=_gripper(gripper),
         friction_coef=friction_coef,
         params=params,
@@ -185,7 +182,7 @@ def robust_quality(
     else:
         poses = grasps
     return _native.robust_quality(
-        vertices, triangles, _pose(poses), gripper=_gripper(gripper), params=params, seed=seed
+        vertices, triangles, f64(poses), gripper=_gripper(gripper), params=params, seed=seed
     )
 
 
@@ -203,10 +200,10 @@ def check_collision(
     return _native.check_collision(
         vertices,
         triangles,
-        _pose(grasp.world_from_gripper),
+        f64(grasp.world_from_gripper),
         grasp.width_m,
         gripper=_gripper(gripper),
-        table_from_object=None if table_from_object is None else _pose(table_from_object),
+        table_from_object=optional_f64(table_from_object),
         params=params,
     )
 
@@ -229,8 +226,8 @@ def physics_trial(
     return _native.physics_trial(
         vertices,
         triangles,
-        _pose(table_from_object),
-        _pose(grasp.world_from_gripper),
+        f64(table_from_object),
+        f64(grasp.world_from_gripper),
         grasp.width_m,
         gripper=_gripper(gripper),
         params=params,

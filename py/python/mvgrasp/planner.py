@@ -24,6 +24,8 @@ import numpy as np
 import numpy.typing as npt
 
 from mvgrasp import _native
+from mvgrasp._arrays import f32, f64, optional_f64
+from mvgrasp._arrays import masks as _masks
 from mvgrasp.cameras import Camera
 from mvgrasp.grasps import Grasp
 
@@ -150,12 +152,12 @@ class PlanResult:
         )
 
 
-def _f64(a: npt.ArrayLike) -> np.ndarray:
-    return np.ascontiguousarray(a, dtype=np.float64)
-
-
-def _depth(a: npt.ArrayLike) -> np.ndarray:
-    return a if isinstance(a, np.ndarray) and a.dtype == np.float32 else np.asarray(a, np.float32)
+def _posed(cameras: Sequence[Camera]) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """The cameras' matrices and poses; ``ValueError`` for a camera without a pose."""
+    for i, c in enumerate(cameras):
+        if c.world_from_camera is None:
+            raise ValueError(f"cameras[{i}]: no world_from_camera (views need their poses)")
+    return [f64(c.k) for c in cameras], [f64(c.world_from_camera) for c in cameras]
 
 
 class Planner:
@@ -195,22 +197,21 @@ class Planner:
     ) -> PlanResult:
         """Plans on one depth image (float32 metres, ``(H, W)``; 0, NaN and infinities are
         missing), as ``plan --depth`` does. ``camera``: a :class:`Camera` (its pose is used
-        unless ``world_from_camera`` is given) or a 3x3 camera matrix. Without a pose the
-        world is put on the table fitted in the image (frame ``estimated``)."""
+        unless ``world_from_camera`` is given; a camera without one has none) or a 3x3 camera
+        matrix. Without a pose the world is put on the table fitted in the image (frame
+        ``estimated``)."""
         if isinstance(camera, Camera):
             k = camera.k
-            if world_from_camera is None and not np.array_equal(
-                camera.world_from_camera, np.eye(4)
-            ):
+            if world_from_camera is None:
                 world_from_camera = camera.world_from_camera
         else:
             k = camera
         started = time.perf_counter()
         text = _native.plan_depth(
-            _depth(depth),
-            _f64(k),
+            f32(depth),
+            f64(k),
             mask=None if mask is None else np.asarray(mask, dtype=bool),
-            world_from_camera=None if world_from_camera is None else _f64(world_from_camera),
+            world_from_camera=optional_f64(world_from_camera),
             as_json=True,
             **self._options(),
         )
@@ -227,12 +228,9 @@ class Planner:
         frame; with ``fuse`` its z up from the table), as ``plan --views-dir`` does."""
         started = time.perf_counter()
         text = _native.plan_views(
-            [_depth(d) for d in depths],
-            [_f64(c.k) for c in cameras],
-            [_f64(c.world_from_camera) for c in cameras],
-            masks=None
-            if masks is None
-            else [None if m is None else np.asarray(m, dtype=bool) for m in masks],
+            [f32(d) for d in depths],
+            *_posed(cameras),
+            masks=_masks(masks),
             as_json=True,
             **self._options(),
         )
@@ -256,11 +254,8 @@ class Planner:
         options.pop("fuse")
         text = _native.plan_rgb(
             [np.ascontiguousarray(i, dtype=np.uint8) for i in images],
-            [_f64(c.k) for c in cameras],
-            [_f64(c.world_from_camera) for c in cameras],
-            masks=None
-            if masks is None
-            else [None if m is None else np.asarray(m, dtype=bool) for m in masks],
+            *_posed(cameras),
+            masks=_masks(masks),
             depth_from=depth_from,
             as_json=True,
             **options,
