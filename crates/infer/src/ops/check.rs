@@ -108,3 +108,26 @@ pub(crate) fn window_output(
     let padded = input + 2 * padding;
     (padded >= span).then(|| (padded - span) / stride + 1)
 }
+
+/// The outputs `lo..hi` along one axis whose input `o * stride + offset - padding` lies in
+/// `0..width` (a sliding window's tap `offset`: the outputs that read the input, not padding).
+pub(crate) fn valid_outputs(
+    width: usize,
+    out_width: usize,
+    stride: usize,
+    padding: usize,
+    offset: usize,
+) -> (usize, usize) {
+    // ox * stride + offset >= padding
+    let lo = padding
+        .saturating_sub(offset)
+        .div_ceil(stride)
+        .min(out_width);
+    // ox * stride + offset - padding <= width - 1
+    let hi = if width + padding > offset {
+        ((width + padding - offset - 1) / stride + 1).min(out_width)
+    } else {
+        0
+    };
+    (lo, hi.max(lo))
+}

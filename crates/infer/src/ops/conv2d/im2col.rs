@@ -10,6 +10,8 @@ use rayon::prelude::*;
 use super::geometry::{Conv2dParams, Geometry};
 use crate::error::Result;
 use crate::gemm::{Rhs, matmul, matmul_rows};
+use crate::ops::check::valid_outputs;
+use crate::ops::stretch;
 use crate::parallel::Parallelism;
 use crate::tensor::Tensor;
 
@@ -91,16 +93,6 @@ pub fn conv2d_into(
             }
             Ok(())
         })
-}
-
-/// The first `len` values of `scratch`, which grows to hold them but never shrinks: a buffer
-/// shared by layers of different sizes would otherwise be zero-filled again each time it grew
-/// (megabytes an image, for Dex-Net's second convolution).
-fn stretch(scratch: &mut Vec<f32>, len: usize) -> &mut [f32] {
-    if scratch.len() < len {
-        scratch.resize(len, 0.0);
-    }
-    &mut scratch[..len]
 }
 
 /// Whether the convolution reads each input value once per output position unchanged (a 1x1
@@ -273,29 +265,6 @@ fn unfold_same_width(g: &Geometry, x: &[f32], col: &mut [f32], band: Range<usize
             }
         }
     }
-}
-
-/// The output columns `lo..hi` whose input column `ox * stride + offset - padding` lies in
-/// `0..width`.
-fn valid_outputs(
-    width: usize,
-    out_width: usize,
-    stride: usize,
-    padding: usize,
-    offset: usize,
-) -> (usize, usize) {
-    // ox * stride + offset >= padding
-    let lo = padding
-        .saturating_sub(offset)
-        .div_ceil(stride)
-        .min(out_width);
-    // ox * stride + offset - padding <= width - 1
-    let hi = if width + padding > offset {
-        ((width + padding - offset - 1) / stride + 1).min(out_width)
-    } else {
-        0
-    };
-    (lo, hi.max(lo))
 }
 
 #[cfg(test)]

@@ -1,0 +1,164 @@
+//! The fast 3-D convolution: each image is unfolded into a `[C * k0 * k1 * k2, positions]`
+//! column matrix (vol2col) a band of output slices at a time, and one faer product with the
+//! weight, read as `[out_C, C * k0 * k1 * k2]`, writes the band's outputs in place.
+
+use std::ops::Range;
+
+use super::geometry::{Conv3dParams, Geometry, Kind};
+use crate::error::Result;
+use crate::gemm::{Rhs, matmul_rows};
+use crate::ops::check::valid_outputs;
+use crate::ops::stretch;
+use crate::parallel::Parallelism;
+use crate::tensor::Tensor;
+
+/// 3-D convolution of an `[N, C, D, H, W]` batch with an `[out_C, C, k0, k1, k2]` weight
+/// (torch's layout) and an optional `[out_C]` bias, into a new `[N, out_C, od, oh, ow]` tensor.
+///
+/// # Errors
+/// As [`conv3d_into`].
+pub fn conv3d(
+    input: &Tensor,
+    weight: &Tensor,
+    bias: Option<&Tensor>,
+    params: Conv3dParams,
+    par: Parallelism,
+) -> Result<Tensor> {
+    let mut out = Tensor::default();
+    conv3d_into(input, weight, bias, params, &mut out, &mut Vec::new(), par)?;
+    Ok(out)
+}
+
+/// [`conv3d`] into `out`, resized to `[N, out_C, od, oh, ow]`, with `scratch` for the column
+/// matrices; both keep their allocations from call to call. The images run one after the
+/// other, each product split among `par`'s threads (the Learnt Stereo Machine convolves one
+/// grid at a time); every value is the same whatever the split.
+///
+/// # Errors
+/// [`InferError::ShapeMismatch`](crate::InferError::ShapeMismatch) when `input` is not
+/// `[N, C, D, H, W]`, `weight` not `[out_C, C, k0, k1, k2]` with every side at least 1, `bias`
+/// not `[out_C]`, or the kernel does not fit the padded input;
+/// [`InferError::InvalidParameter`](crate::InferError::InvalidParameter) for a zero stride.
+pub fn conv3d_into(
+    input: &Tensor,
+    weight: &Tensor,
+    bias: Option<&Tensor>,
+    params: Conv3dParams,
+    out: &mut Tensor,
+    scratch: &mut Vec<f32>,
+    par: Parallelism,
+) -> Result<()> {
+    let (g, bias) = Geometry::new(Kind::Direct, input, weight, bias, params)?;
+    out.resize(&g.output_shape());
+    let (in_len, out_len) = (g.input_len(), g.output_len());
+    if g.n == 0 || out_len == 0 {
+        return Ok(());
+    }
+    let band = band_slices(&g);
+    let slice = g.output[1] * g.output[2];
+    let col = stretch(scratch, g.c * g.taps() * band * slice);
+    let (x, k) = (input.data(), weight.data());
+    for (i, y) in out.data_mut().chunks_exact_mut(out_len).enumerate() {
+        image(&g, &x[i * in_len..(i + 1) * in_len], k, bias, y, col, par)?;
+    }
+    Ok(())
+}
+
+/// The most values of a band's column matrix (1 MiB, as the 2-D convolution's bands).
+const BAND_VALUES: usize = 1 << 18;
+
+/// The output slices (along depth) unfolded and multiplied at a time, fixed by the geometry
+/// alone so that every value is the same whatever the threads.
+fn band_slices(g: &Geometry) -> usize {
+    let per_slice = g.c * g.taps() * g.output[1] * g.output[2];
+    (BAND_VALUES / per_slice.max(1)).clamp(1, g.output[0].max(1))
+}
+
+/// One image: `y [oc, positions] = weight [oc, c * taps] · columns [c * taps, positions]`
+/// (+ bias), the columns made and multiplied a band of output slices at a time.
+fn image(
+    g: &Geometry,
+    x: &[f32],
+    weight: &[f32],
+    bias: Option<&[f32]>,
+    y: &mut [f32],
+    col: &mut [f32],
+    par: Parallelism,
+) -> Result<()> {
+    let slice = g.output[1] * g.output[2];
+    let positions = g.output[0] * slice;
+    if let Some(bias) = bias {
+        for (row, &b) in y.chunks_exact_mut(positions).zip(bias) {
+            row.fill(b);
+        }
+    }
+    let rows = g.c * g.taps();
+    let band = band_slices(g);
+    for start in (0..g.output[0]).step_by(band) {
+        let slices = start..(start + band).min(g.output[0]);
+        let n = slices.len() * slice;
+        let col = &mut col[..rows * n];
+        unfold(g, x, col, slices);
+        matmul_rows(
+            "conv3d",
+            &mut y[start * slice..],
+            positions,
+            weight,
+            col,
+            [g.oc, rows, n],
+            Rhs::RowMajor,
+            bias.is_some(),
+            par,
+        )?;
+    }
+    Ok(())
+}
+
+/// vol2col of output slices `band`: row `(c, kz, ky, kx)` of `col` holds, for every output
+/// position of the band, the input value that kernel tap meets there (zero in the padding).
+fn unfold(g: &Geometry, x: &[f32], col: &mut [f32], band: Range<usize>) {
+    let [d, h, w] = g.input;
+    let [_, oh, ow] = g.output;
+    let [s0, s1, s2] = g.stride;
+    let [p0, p1, p2] = g.padding;
+    let mut rows = col.chunks_exact_mut(band.len() * oh * ow);
+    for volume in x.chunks_exact(d * h * w).take(g.c) {
+        for kz in 0..g.kernel[0] {
+            for ky in 0..g.kernel[1] {
+                for kx in 0..g.kernel[2] {
+                    let Some(row) = rows.next() else { return };
+                    let (lo, hi) = valid_outputs(w, ow, s2, p2, kx);
+                    let mut out_rows = row.chunks_exact_mut(ow);
+                    for oz in band.clone() {
+                        let iz = (oz * s0 + kz).checked_sub(p0).filter(|&i| i < d);
+                        for oy in 0..oh {
+                            let Some(out_row) = out_rows.next() else {
+                                return;
+                            };
+                            let iy = (oy * s1 + ky).checked_sub(p1).filter(|&i| i < h);
+                            let (Some(iz), Some(iy)) = (iz, iy) else {
+                                out_row.fill(0.0);
+                                continue;
+                            };
+                            out_row[..lo].fill(0.0);
+                            out_row[hi..].fill(0.0);
+                            if lo == hi {
+                                continue;
+                            }
+                            let in_row = &volume[(iz * h + iy) * w..(iz * h + iy + 1) * w];
+                            let first = lo * s2 + kx - p2;
+                            if s2 == 1 {
+                                out_row[lo..hi].copy_from_slice(&in_row[first..first + (hi - lo)]);
+                            } else {
+                                let taps = in_row[first..].iter().step_by(s2);
+                                for (v, &xv) in out_row[lo..hi].iter_mut().zip(taps) {
+                                    *v = xv;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
