@@ -1,20 +1,32 @@
-"""Export of a trained GQ-CNN for the Rust runtime: ``NAME.safetensors`` (every tensor of the
-state dict, float32) and ``NAME.json`` (format, architecture, normalisation, tensor shapes, the
-input contract, and whatever the caller records about training)."""
+"""Export of trained networks for the Rust runtime. A GQ-CNN: ``NAME.safetensors`` (every
+tensor of the state dict, float32) and ``NAME.json`` (format, architecture, normalisation, tensor shapes, the
+input contract, and whatever the caller records about training); an LSM: the same pair, its
+architecture in place of the normalisation (``export_lsm``)."""
 
 from __future__ import annotations
 
 import json
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
 import torch
-from safetensors.torch import save_file
+from safetensors.torch import load_file, save_file
 
 from mvgrasp_training._files import read_format_json
 from mvgrasp_training.gqcnn import GQCNN
+from mvgrasp_training.lsm import LSM, LsmArchitecture
 
 FORMAT = "mvgrasp-gqcnn/1"
+
+
+def _save_weights(net: torch.nn.Module, stem: Path) -> tuple[dict[str, torch.Tensor], Path]:
+    """Writes ``stem.safetensors``: every tensor of the state dict, float32."""
+    stem.parent.mkdir(parents=True, exist_ok=True)
+    tensors = {k: v.detach().to(torch.float32).contiguous() for k, v in net.state_dict().items()}
+    weights = stem.with_suffix(".safetensors")
+    save_file(tensors, str(weights))
+    return tensors, weights
 
 
 def export_gqcnn(
@@ -29,10 +41,7 @@ def export_gqcnn(
     the Rust planner cuts its crops to it.
     """
     stem = Path(stem)
-    stem.parent.mkdir(parents=True, exist_ok=True)
-    tensors = {k: v.detach().to(torch.float32).contiguous() for k, v in net.state_dict().items()}
-    weights = stem.with_suffix(".safetensors")
-    save_file(tensors, str(weights))
+    tensors, weights = _save_weights(net, stem)
     description = {
         "format": FORMAT,
         "weights": weights.name,
@@ -81,4 +90,43 @@ def load_gqcnn(path: str | Path) -> tuple[GQCNN, dict[str, Any]]:
                 f"expected {list(value.shape)}"
             )
     net.load_state_dict({name: tensors[name] for name in expected})
+    return net.eval(), description
+
+
+LSM_FORMAT = "mvgrasp-lsm/1"
+
+
+def export_lsm(net: LSM, stem: str | Path, training: dict[str, Any] | None = None) -> Path:
+    """Writes an LSM's ``stem.safetensors`` (its state dict, float32) and ``stem.json`` (format,
+    architecture, tensor shapes, what the caller records about training) for the Rust runtime
+    (``mvgrasp_infer::Lsm``); returns the JSON's path."""
+    stem = Path(stem)
+    tensors, weights = _save_weights(net, stem)
+    description = {
+        "format": LSM_FORMAT,
+        "weights": weights.name,
+        "architecture": asdict(net.arch),
+        "tensors": {k: list(v.shape) for k, v in sorted(tensors.items())},
+        "training": training or {},
+    }
+    path = stem.with_suffix(".json")
+    path.write_text(json.dumps(description, indent=2) + "\n")
+    return path
+
+
+def load_lsm(path: str | Path) -> tuple[LSM, dict[str, Any]]:
+    """Reads an LSM export back into torch: the network (eval mode) and its description.
+
+    Raises:
+        ValueError: the JSON is not an LSM export, or its weights do not fit the architecture.
+    """
+    path = Path(path)
+    description = json.loads(path.read_text())
+    if description.get("format") != LSM_FORMAT:
+        raise ValueError(f"{path}: format {description.get('format')!r}, expected {LSM_FORMAT!r}")
+    net = LSM(LsmArchitecture(**description["architecture"]))
+    try:
+        net.load_state_dict(load_file(str(path.parent / description["weights"])))
+    except RuntimeError as e:
+        raise ValueError(f"{path}: weights do not fit the architecture: {e}") from e
     return net.eval(), description

@@ -6,3 +6,4 @@ mod common;
 
 mod gqcnn_parity;
 mod gqcnn_shaped_forward;
+mod lsm_parity;

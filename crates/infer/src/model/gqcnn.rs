@@ -8,7 +8,7 @@ use crate::model::description::{
     Architecture, ConvSpec, GQCNN_FORMAT, GqcnnDescription, InputSpec,
 };
 use crate::model::image_stream::{ImageStream, StreamBuffers};
-use crate::model::weights::Weights;
+use crate::model::weights::{Weights, beside, parse_description, read_description};
 use crate::ops::{LocalResponseNorm, concat_into, linear_into, relu, softmax};
 use crate::parallel::Parallelism;
 use crate::tensor::Tensor;
@@ -61,16 +61,9 @@ impl Gqcnn {
     /// [`InferError::Weight`] naming the weights file and tensor for missing, misshapen, extra
     /// or non-f32 tensors and truncated files.
     pub fn load(json: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(json).map_err(|e| InferError::Model {
-            detail: e.to_string(),
-            path: json.to_path_buf(),
-        })?;
-        let description = Self::parse_description(&text, json)?;
-        let weights_path = json
-            .parent()
-            .unwrap_or(Path::new("."))
-            .join(&description.weights);
-        Self::build(description, Weights::load(&weights_path)?)
+        let description = Self::parse_description(&read_description(json)?, json)?;
+        let weights = Weights::load(&beside(json, &description.weights))?;
+        Self::build(description, weights)
     }
 
     /// Builds the network from a description (the JSON's text) and its safetensors file held
@@ -81,11 +74,8 @@ impl Gqcnn {
     /// As [`Gqcnn::load`].
     pub fn from_bytes(json_text: &str, weights: &[u8], json: &Path) -> Result<Self> {
         let description = Self::parse_description(json_text, json)?;
-        let weights_path = json
-            .parent()
-            .unwrap_or(Path::new("."))
-            .join(&description.weights);
-        Self::build(description, Weights::from_bytes(weights, &weights_path)?)
+        let weights = Weights::from_bytes(weights, &beside(json, &description.weights))?;
+        Self::build(description, weights)
     }
 
     fn parse_description(text: &str, json: &Path) -> Result<GqcnnDescription> {
@@ -93,14 +83,13 @@ impl Gqcnn {
             detail,
             path: json.to_path_buf(),
         };
-        let description: GqcnnDescription = serde_json::from_str(text)
-            .map_err(|e| model_error(format!("not a GQ-CNN description: {e}")))?;
-        if description.format != GQCNN_FORMAT {
-            return Err(model_error(format!(
-                "format {:?}, expected {GQCNN_FORMAT:?}",
-                description.format
-            )));
-        }
+        let description: GqcnnDescription = parse_description(
+            text,
+            json,
+            "a GQ-CNN",
+            GQCNN_FORMAT,
+            |d: &GqcnnDescription| &d.format,
+        )?;
         check_architecture(&description.architecture).map_err(&model_error)?;
         if let Some(input) = &description.input {
             input

@@ -3,10 +3,12 @@
 pub mod description;
 pub mod gqcnn;
 mod image_stream;
+pub mod lsm;
 pub mod weights;
 
 pub use description::{
     Architecture, ConvSpec, GQCNN_FORMAT, GqcnnDescription, InputSpec, Normalisation,
 };
 pub use gqcnn::{Gqcnn, GqcnnWorkspace};
+pub use lsm::{LSM_FORMAT, Lsm, LsmArchitecture, LsmDescription};
 pub use weights::Weights;

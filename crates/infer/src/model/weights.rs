@@ -133,6 +133,43 @@ impl Weights {
     }
 }
 
+/// The text of a model's description `json`.
+pub(crate) fn read_description(json: &Path) -> Result<String> {
+    std::fs::read_to_string(json).map_err(|e| InferError::Model {
+        detail: e.to_string(),
+        path: json.to_path_buf(),
+    })
+}
+
+/// The path of a file a description names, beside the description.
+pub(crate) fn beside(json: &Path, name: &str) -> PathBuf {
+    json.parent().unwrap_or(Path::new(".")).join(name)
+}
+
+/// A description of `kind` ("GQ-CNN") parsed from `text`, its `format` field checked against
+/// `format`; errors name `json`.
+pub(crate) fn parse_description<T: serde::de::DeserializeOwned>(
+    text: &str,
+    json: &Path,
+    kind: &str,
+    format: &str,
+    format_of: impl Fn(&T) -> &str,
+) -> Result<T> {
+    let model_error = |detail: String| InferError::Model {
+        detail,
+        path: json.to_path_buf(),
+    };
+    let description: T = serde_json::from_str(text)
+        .map_err(|e| model_error(format!("not {kind} description: {e}")))?;
+    if format_of(&description) != format {
+        return Err(model_error(format!(
+            "format {:?}, expected {format:?}",
+            format_of(&description)
+        )));
+    }
+    Ok(description)
+}
+
 #[cfg(test)]
 mod tests {
     #![allow(clippy::unwrap_used)]

@@ -21,6 +21,7 @@ mod pool2d;
 mod relu;
 mod resize;
 mod softmax;
+mod voxel_grid;
 
 pub use batch_norm::{BatchNorm, batch_norm, batch_norm_reference};
 pub use concat::{concat, concat_into};
@@ -44,6 +45,7 @@ pub use pool2d::{
 pub use relu::relu;
 pub use resize::{resize_area, resize_bilinear};
 pub use softmax::softmax;
+pub use voxel_grid::{CameraMatrices, VoxelGrid, project_rays, unproject};
 
 /// The first `len` values of `scratch`, which grows to hold them but never shrinks: a buffer
 /// shared by layers of different sizes would otherwise be zero-filled again each time it grew
