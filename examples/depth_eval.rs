@@ -13,8 +13,10 @@
 //! within 2 mm and 5 mm (of all object pixels: a missing pixel is not within), the paper's
 //! normalised error (here: the mean absolute error divided by the mean true depth of the object
 //! pixels, so 0.0035 is 1.75 mm at 0.5 m), and the prediction's time for the N views.
-//! Methods: the plane sweep inside the visual hull (`stereo::sweep_depths`) and the visual hull
-//! alone (its nearest surface).
+//! Methods: the Learnt Stereo Machine (the shipped `models/lsm_small`, `lsm::lsm_depths`), the
+//! plane sweep inside the visual hull (`stereo::sweep_depths`) and the visual hull alone (its
+//! nearest surface; timed with the sweep, which makes it). The LSM's threads: rayon's pool
+//! (`RAYON_NUM_THREADS`), as the baseline's.
 
 use std::process::ExitCode;
 use std::time::Instant;
@@ -22,7 +24,9 @@ use std::time::Instant;
 use clap::Parser;
 use mvgrasp::geometry::objects::{Category, generate};
 use mvgrasp::geometry::{HemisphereLayout, Intrinsics, IntrinsicsPreset, RestingPoses};
-use mvgrasp::planner::{RgbInput, render_rgb};
+use mvgrasp::infer::Parallelism;
+use mvgrasp::lsm::lsm_depths;
+use mvgrasp::planner::{DepthPredictor, RgbInput, models, render_rgb};
 use mvgrasp::render::{Backend, Renderer};
 use mvgrasp::stereo::{RgbView, SweepParams, sweep_depths};
 
@@ -89,14 +93,20 @@ fn main() -> ExitCode {
 fn run(args: &Args) -> Result<(), String> {
     let renderer = Renderer::new(Backend::Auto).map_err(|e| e.to_string())?;
     let intrinsics = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
+    let sweep = SweepParams::default();
     let input = RgbInput {
-        sweep: SweepParams::default(),
+        depth: DepthPredictor::Baseline(sweep.clone()),
         per_face: args.per_face,
     };
+    let lsm = models::LSM
+        .load()
+        .map_err(|e| e.to_string())?
+        .with_parallelism(Parallelism::all_threads());
     let counts = [3usize, 5, 9];
-    // [n][method][top-down, all views]; method 0 sweep, 1 hull.
-    let mut tallies = vec![[[Errors::default(); 2]; 2]; counts.len()];
-    let mut seconds = vec![0.0f64; counts.len()];
+    // [n][method][top-down, all views]; method 0 LSM, 1 sweep, 2 hull.
+    let mut tallies = vec![[[Errors::default(); 2]; 3]; counts.len()];
+    // [n][LSM, baseline]
+    let mut seconds = vec![[0.0f64; 2]; counts.len()];
     let mut objects = 0;
     for category in Category::ALL {
         for index in 30..30 + args.per_category {
@@ -125,11 +135,16 @@ fn run(args: &Args) -> Result<(), String> {
             for (c, &n) in counts.iter().enumerate() {
                 let views: Vec<RgbView> = rendered[..n].iter().map(|(v, _)| v.clone()).collect();
                 let started = Instant::now();
-                let depths = sweep_depths(&views, &input.sweep).map_err(|e| e.to_string())?;
-                seconds[c] += started.elapsed().as_secs_f64();
-                for (i, (swept, (view, truth))) in depths.iter().zip(&rendered).enumerate() {
+                let learnt = lsm_depths(&lsm, &views).map_err(|e| e.to_string())?;
+                seconds[c][0] += started.elapsed().as_secs_f64();
+                let started = Instant::now();
+                let depths = sweep_depths(&views, &sweep).map_err(|e| e.to_string())?;
+                seconds[c][1] += started.elapsed().as_secs_f64();
+                let predictions = learnt.iter().zip(&depths);
+                for (i, ((lsm, swept), (view, truth))) in predictions.zip(&rendered).enumerate() {
                     let mask = view.mask.as_deref().unwrap_or(&[]);
-                    for (m, predicted) in [&swept.depth_m, &swept.hull_m].into_iter().enumerate() {
+                    let methods = [lsm, &swept.depth_m, &swept.hull_m];
+                    for (m, predicted) in methods.into_iter().enumerate() {
                         if i == 0 {
                             tallies[c][m][0].add(predicted, truth, mask);
                         }
@@ -151,15 +166,17 @@ fn run(args: &Args) -> Result<(), String> {
     );
     println!("|---|---|---|---|---|---|---|---|---|");
     for (c, &n) in counts.iter().enumerate() {
-        for (m, method) in ["plane sweep in the hull", "visual hull alone"]
-            .iter()
-            .enumerate()
-        {
+        let methods = [
+            "LSM (lsm_small)",
+            "plane sweep in the hull",
+            "visual hull alone",
+        ];
+        for (m, method) in methods.iter().enumerate() {
             for (s, scored) in ["top-down", "all"].iter().enumerate() {
                 println!(
                     "| {method} | {n} | {scored} | {} | {:.2} |",
                     tallies[c][m][s].row(),
-                    seconds[c] / objects as f64
+                    seconds[c][m.min(1)] / objects as f64
                 );
             }
         }

@@ -36,11 +36,10 @@ use mvgrasp::grasp::GraspObject;
 use mvgrasp::grasp::physics::FailureStage;
 use mvgrasp::infer::Gqcnn;
 use mvgrasp::planner::{
-    CemParams, FusionParams, GqcnnPolicy, PlanParams, RgbInput, ShippedModel, VirtualScorer,
-    check_grasps, models, plan_grasp,
+    CemParams, DepthFrom, DepthPredictor, FusionParams, GqcnnPolicy, PlanParams, RgbInput,
+    ShippedModel, VirtualScorer, check_grasps, models, plan_grasp,
 };
 use mvgrasp::render::{Backend, Renderer};
-use mvgrasp::stereo::SweepParams;
 
 /// Plan with each policy on unseen objects; check the chosen grasps in physics.
 #[derive(Parser, Debug)]
@@ -92,9 +91,9 @@ struct Args {
     /// one (a candidate measured before it ships).
     #[arg(long)]
     mvgqcnn: Option<PathBuf>,
-    /// The policies (topdown, per-view, fused-3, fused-5, fused-10, and rgb-fused-N: the fused
-    /// planner on depth predicted from N RGB views by the plane-sweep baseline); all but the
-    /// RGB ones when none is given.
+    /// The policies (topdown, per-view, fused-3, fused-5, fused-10, and lsm-fused-N or
+    /// rgb-fused-N: the fused planner on depth predicted from N RGB views by the Learnt Stereo
+    /// Machine or the plane-sweep baseline); all but the RGB ones when none is given.
     #[arg(long = "policy")]
     policies: Vec<String>,
     /// The first built-in object index of each category (30: the report set; 50: the
@@ -140,8 +139,8 @@ struct Policy {
     views: usize,
     radius_m: f32,
     fused: bool,
-    /// Depth predicted from RGB by the baseline instead of rendered.
-    rgb: bool,
+    /// Depth predicted from RGB (by this predictor) instead of rendered.
+    rgb: Option<DepthFrom>,
 }
 
 /// The policies named on the command line (all without names, the top-down one alone with
@@ -164,7 +163,7 @@ fn policies(args: &Args) -> Result<Vec<Policy>, String> {
                     views: 1,
                     radius_m: 0.7,
                     fused: false,
-                    rgb: false,
+                    rgb: None,
                 },
                 "per-view" => Policy {
                     label: "MV-GQ-CNN, 10 views".into(),
@@ -172,25 +171,34 @@ fn policies(args: &Args) -> Result<Vec<Policy>, String> {
                     views: 10,
                     radius_m: args.mv_radius_m,
                     fused: false,
-                    rgb: false,
+                    rgb: None,
                 },
                 _ => {
-                    let rgb = name.starts_with("rgb-");
+                    let rgb = if name.starts_with("lsm-") {
+                        Some(DepthFrom::Lsm)
+                    } else if name.starts_with("rgb-") {
+                        Some(DepthFrom::Baseline)
+                    } else {
+                        None
+                    };
                     let views = name
                         .trim_start_matches("rgb-")
+                        .trim_start_matches("lsm-")
                         .strip_prefix("fused-")
                         .and_then(|n| n.parse::<usize>().ok())
                         .filter(|&n| n > 0)
                         .ok_or_else(|| {
                             format!(
-                                "--policy {name}: expected topdown, per-view, fused-N or rgb-fused-N (N views)"
+                                "--policy {name}: expected topdown, per-view, fused-N, lsm-fused-N or rgb-fused-N (N views)"
                             )
                         })?;
                     Policy {
-                        label: if rgb {
-                            format!("fused, {views} RGB views")
-                        } else {
-                            format!("fused, {views} views")
+                        label: match rgb {
+                            Some(DepthFrom::Lsm) => format!("fused, {views} RGB views, LSM"),
+                            Some(DepthFrom::Baseline) => {
+                                format!("fused, {views} RGB views, baseline")
+                            }
+                            None => format!("fused, {views} views"),
                         },
                         model: models::MVGQCNN,
                         views,
@@ -290,10 +298,13 @@ fn run(args: &Args) -> Result<(), String> {
             ..Default::default()
         };
         params.labels.physics_shape.shell = args.shell;
-        params.depth_from_rgb = p.rgb.then(|| RgbInput {
-            sweep: SweepParams::default(),
-            per_face: args.rgb_per_face,
-        });
+        params.depth_from_rgb = match p.rgb {
+            Some(from) => Some(RgbInput {
+                depth: DepthPredictor::shipped(from).map_err(|e| e.to_string())?,
+                per_face: args.rgb_per_face,
+            }),
+            None => None,
+        };
         params.labels.physics.grip_true_surface = args.grip_surface;
         params.views.radius_m = p.radius_m;
         if p.fused {

@@ -15,6 +15,7 @@ pub mod error;
 pub mod grasp_dataset;
 pub mod grasp_image;
 pub mod grasps_file;
+pub mod lsm;
 pub mod mcap_log;
 pub mod planner;
 pub mod report;

@@ -177,6 +177,15 @@ fn check(views: &[RgbView], params: &SweepParams) -> Result<()> {
     Ok(())
 }
 
+/// Per pixel of `camera` (row-major), the depth at which its ray meets the table plane (world
+/// z = 0), if ahead of the camera.
+pub(crate) fn table_depth(camera: &Camera) -> Vec<Option<f32>> {
+    let rays = Rays::of(camera);
+    (0..rays.ray.len())
+        .map(|i| rays.depth_at_height(i, 0.0))
+        .collect()
+}
+
 /// The world point seen at pixel (u, v) at depth `d`: `origin + d * ray`.
 struct Rays {
     origin: Vec3,

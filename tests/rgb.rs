@@ -1,6 +1,6 @@
 //! Planning on RGB views (`plan --rgb`): depth predicted from a `render` folder's colour
-//! images and cameras by the plane-sweep baseline, the multi-view planner on it; and the one
-//! line of each kind of bad input.
+//! images and cameras by the shipped Learnt Stereo Machine or the plane-sweep baseline, the
+//! multi-view planner on it; and the one line of each kind of bad input.
 
 use std::path::Path;
 use std::process::Command;
@@ -8,6 +8,7 @@ use std::process::Command;
 use mvgrasp::planner::{read_rgb_dir, read_views_dir};
 
 use crate::common::render_dataset;
+use mvgrasp::planner::{DepthFrom, DepthPredictor};
 use mvgrasp::stereo::{SweepParams, sweep_depths};
 
 fn plan_rgb(dir: &Path, extra: &[&str]) -> std::process::Output {
@@ -56,7 +57,7 @@ fn plan_on_rgb_views_predicts_depth_near_the_rendered_depth_and_grasps_the_box()
         errors[errors.len() / 2]
     );
 
-    let out = plan_rgb(&test, &["--json"]);
+    let out = plan_rgb(&test, &["--json", "--depth-from", "baseline"]);
     assert!(
         out.status.success(),
         "{}",
@@ -85,9 +86,64 @@ fn plan_on_rgb_views_predicts_depth_near_the_rendered_depth_and_grasps_the_box()
     assert!(p[2] > 0.0 && p[2] < 0.1, "{p:?}");
     assert!(best["width_m"].as_f64().unwrap() < 0.08);
 
-    let out = plan_rgb(&test, &["--depth-from", "lsm"]);
+    let out = plan_rgb(&test, &["--depth-from", "rendered"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--depth-from"));
+}
+
+#[test]
+fn the_shipped_lsm_predicts_the_box_within_its_measured_error_and_plan_rgb_runs_on_it() {
+    let dir = tempfile::tempdir().unwrap();
+    render_dataset(dir.path(), "box");
+    let test = dir.path().join("box_000/test");
+    let rgb = read_rgb_dir(&test).unwrap();
+    let truth = read_views_dir(&test).unwrap();
+    let lsm = DepthPredictor::shipped(DepthFrom::Lsm).unwrap();
+    let depths = lsm.depths(&rgb[..5]).unwrap();
+    assert_eq!(depths.len(), 5);
+    // Every box pixel predicted, with a median error within the network's measured accuracy
+    // (models/README.md: about 14 mm on unseen objects from 5 views, top-down); off the box the
+    // table plane (the mask).
+    for (view, (depth, truth)) in depths.iter().zip(&truth).enumerate() {
+        let mask = rgb[view].mask.as_ref().unwrap();
+        let truth = truth.depth.as_slice();
+        let on_box = depth.iter().zip(mask).filter(|(_, m)| **m);
+        assert!(
+            on_box.clone().all(|(d, _)| d.is_finite() && *d > 0.0),
+            "view {view}"
+        );
+        let mut errors: Vec<f32> = (0..mask.len())
+            .filter(|&i| mask[i])
+            .map(|i| (depth[i] - truth[i]).abs())
+            .collect();
+        errors.sort_by(f32::total_cmp);
+        let median = errors[errors.len() / 2];
+        assert!(median < 0.03, "view {view}: median error {median} m");
+        let off = (0..mask.len())
+            .find(|&i| !mask[i] && truth[i] > 0.0)
+            .unwrap();
+        assert!(
+            (depth[off] - truth[off]).abs() < 1e-3,
+            "view {view}: the table"
+        );
+    }
+    // The default predictor of plan --rgb; a grasp or none (exit 3), the same bytes twice.
+    let a = plan_rgb(&test, &["--json"]);
+    let b = plan_rgb(&test, &["--json"]);
+    assert!(
+        matches!(a.status.code(), Some(0 | 3)),
+        "{}",
+        String::from_utf8_lossy(&a.stderr)
+    );
+    assert_eq!(a.stdout, b.stdout);
+    let text = String::from_utf8(plan_rgb(&test, &[]).stdout).unwrap();
+    assert!(
+        text.contains("predicted from RGB by the Learnt Stereo Machine"),
+        "{text}"
+    );
+    // One view cannot place the LSM's grid.
+    let err = lsm.depths(&rgb[..1]).unwrap_err().to_string();
+    assert!(err.contains("at least 2 views"), "{err}");
 }
 
 #[test]

@@ -31,7 +31,7 @@ if [[ $# -gt 0 ]]; then
     models=("$@")
 else
     shopt -s nullglob
-    models=("$root"/models/*.json)
+    models=("$root"/models/gqcnn_*.json)
     shopt -u nullglob
 fi
 if [[ ${#models[@]} -eq 0 ]]; then

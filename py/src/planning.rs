@@ -4,10 +4,10 @@
 
 use mvgrasp::grasps_file::GraspsFile;
 use mvgrasp::planner::{
-    DepthFrom, DepthImage, Mask, PlanOptions, View, plan_grasp, plan_on_rgb_views, plan_on_view,
-    plan_on_views,
+    DepthFrom, DepthImage, DepthPredictor, Mask, PlanOptions, View, plan_grasp, plan_on_rgb_views,
+    plan_on_view, plan_on_views,
 };
-use mvgrasp::stereo::{RgbView, SweepParams, sweep_depths};
+use mvgrasp::stereo::RgbView;
 use mvgrasp_geometry::{Camera, Pose3};
 use mvgrasp_infer::Gqcnn;
 use numpy::{
@@ -208,7 +208,7 @@ pub(crate) fn plan_views<'py>(
 /// `{"report": ..., "grasps_json": ..., "timings": ...}`: `plan --json`'s plan report, the
 /// text of the `grasps.json` that `plan --out` writes, and each stage's seconds.
 #[pyfunction]
-#[pyo3(signature = (vertices, triangles, *, model = None, fuse = false, cem = false, hand_check = true, seed = 0, camera = "phoxi_s", views = None, distance_m = None, stable_pose = 0, physics = true, backend = "auto"))]
+#[pyo3(signature = (vertices, triangles, *, model = None, fuse = false, cem = false, hand_check = true, seed = 0, camera = "phoxi_s", views = None, distance_m = None, stable_pose = 0, physics = true, backend = "auto", depth_from = "rendered"))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn plan_mesh<'py>(
     py: Python<'py>,
@@ -225,14 +225,24 @@ pub(crate) fn plan_mesh<'py>(
     stable_pose: usize,
     physics: bool,
     backend: &str,
+    depth_from: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
     let mesh = mesh_of(&vertices, &triangles)?;
+    let depth_from = match depth_from {
+        "rendered" => None,
+        other => Some(
+            other
+                .parse::<DepthFrom>()
+                .map_err(|e| PyValueError::new_err(format!("depth_from: {e}, or rendered")))?,
+        ),
+    };
     let options = PlanOptions {
         camera: camera.parse().map_err(camera_error)?,
         views,
         distance_m,
         stable_pose,
         physics,
+        depth_from,
         ..options(fuse, cem, hand_check, seed)
     };
     let backend = backend_of(backend)?;
@@ -247,7 +257,7 @@ pub(crate) fn plan_mesh<'py>(
     let file = GraspsFile::of_rendered(&report);
     let t = report.timings;
     let timings = serde_json::json!({
-        "render_s": t.render_s, "fuse_s": t.fuse_s, "plan_s": t.plan_s, "check_s": t.check_s,
+        "render_s": t.render_s, "depth_s": t.depth_s, "fuse_s": t.fuse_s, "plan_s": t.plan_s, "check_s": t.check_s,
     });
     let result = to_python(
         py,
@@ -300,14 +310,14 @@ fn rgb_views(
     Ok(views)
 }
 
-/// Plans a grasp on RGB views, as `plan --rgb` does: each view's depth predicted from the
-/// others by the plane-sweep baseline (`depth_from="baseline"`; the Learnt Stereo Machine is not
-/// shipped yet), then the multi-view planner. `images`: per view an `(H, W, 3)` uint8 image;
+/// Plans a grasp on RGB views, as `plan --rgb` does: the views' depth predicted by the shipped
+/// Learnt Stereo Machine (`depth_from="lsm"`, at least 2 views) or the plane-sweep baseline
+/// (`depth_from="baseline"`), then the multi-view planner. `images`: per view an `(H, W, 3)` uint8 image;
 /// `ks`, `world_from_cameras`: their cameras, posed in the table frame (z up, the table at
 /// z = 0); `masks`: per view the object's pixels or `None`. Returns `grasps.json`'s content
 /// (with `as_json`, its text).
 #[pyfunction]
-#[pyo3(signature = (images, ks, world_from_cameras, *, masks = None, model = None, depth_from = "baseline", cem = false, hand_check = true, seed = 0, as_json = false))]
+#[pyo3(signature = (images, ks, world_from_cameras, *, masks = None, model = None, depth_from = "lsm", cem = false, hand_check = true, seed = 0, as_json = false))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn plan_rgb<'py>(
     py: Python<'py>,
@@ -322,25 +332,25 @@ pub(crate) fn plan_rgb<'py>(
     seed: u64,
     as_json: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let DepthFrom::Baseline = depth_from_of(depth_from)?;
+    let predictor = predictor_of(depth_from)?;
     let views = rgb_views(&images, &ks, &world_from_cameras, masks.as_ref())?;
     let options = options(true, cem, hand_check, seed);
     let net = network(model, &options)?;
     let file = py.detach(|| -> mvgrasp::Result<GraspsFile> {
         let (policy, gripper, params) = options.on_depth(net)?;
-        let report =
-            plan_on_rgb_views(&policy, &gripper, &views, &params, &SweepParams::default())?;
+        let report = plan_on_rgb_views(&policy, &gripper, &views, &params, &predictor)?;
         Ok(GraspsFile::of_views(&report.plan))
     });
     grasps_output(py, &file.map_err(pipeline_error)?, as_json)
 }
 
-/// Each RGB view's depth predicted from the others (`depth_from="baseline"`: silhouette
-/// carving and a plane sweep, `mvgrasp::stereo`), as `plan --rgb` predicts it: a `(V, H, W)`
+/// Each RGB view's depth predicted from all of them (`depth_from="lsm"`: the shipped Learnt
+/// Stereo Machine; `"baseline"`: silhouette carving and a plane sweep, `mvgrasp::stereo`), as
+/// `plan --rgb` predicts it: a `(V, H, W)`
 /// float32 array, metres along each optical axis, 0 where unknown. The inputs are
 /// `plan_rgb`'s.
 #[pyfunction]
-#[pyo3(signature = (images, ks, world_from_cameras, *, masks = None, depth_from = "baseline"))]
+#[pyo3(signature = (images, ks, world_from_cameras, *, masks = None, depth_from = "lsm"))]
 pub(crate) fn predict_depth<'py>(
     py: Python<'py>,
     images: Vec<PyReadonlyArray3<'py, u8>>,
@@ -349,7 +359,7 @@ pub(crate) fn predict_depth<'py>(
     masks: Option<Vec<Option<PyReadonlyArray2<'py, bool>>>>,
     depth_from: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let DepthFrom::Baseline = depth_from_of(depth_from)?;
+    let predictor = predictor_of(depth_from)?;
     let views = rgb_views(&images, &ks, &world_from_cameras, masks.as_ref())?;
     let (w, h) = (
         views[0].camera.intrinsics.width as usize,
@@ -366,17 +376,18 @@ pub(crate) fn predict_depth<'py>(
         ));
     }
     let depths = py
-        .detach(|| sweep_depths(&views, &SweepParams::default()))
+        .detach(|| predictor.depths(&views))
         .map_err(pipeline_error)?;
-    let values: Vec<f32> = depths.into_iter().flat_map(|d| d.depth_m).collect();
+    let values: Vec<f32> = depths.into_iter().flatten().collect();
     Ok(PyArray1::from_vec(py, values)
         .reshape([views.len(), h, w])?
         .into_any())
 }
 
-/// The depth predictor a `depth_from` argument names.
-fn depth_from_of(depth_from: &str) -> PyResult<DepthFrom> {
-    depth_from
+/// The shipped depth predictor a `depth_from` argument names.
+fn predictor_of(depth_from: &str) -> PyResult<DepthPredictor> {
+    let from: DepthFrom = depth_from
         .parse()
-        .map_err(|e| PyValueError::new_err(format!("depth_from: {e}")))
+        .map_err(|e| PyValueError::new_err(format!("depth_from: {e}")))?;
+    DepthPredictor::shipped(from).map_err(pipeline_error)
 }

@@ -61,14 +61,15 @@ def test_planning_on_depth_writes_the_cli_grasps_json_byte_for_byte(tmp_path: Pa
 
 
 def test_planning_on_a_mesh_matches_the_cli_and_checks_in_physics(tmp_path: Path) -> None:
-    plan_cli("--category", "box", "--no-physics", "--out", str(tmp_path / "cli"))
+    plan_cli("--category", "box", "--no-physics", "--depth-from", "rendered",
+             "--out", str(tmp_path / "cli"))  # fmt: skip
     vertices, triangles = mvgrasp.builtin_object("box", 0)
     result = mvgrasp.Planner().plan_mesh(vertices, triangles)
     assert result.grasps_json.encode() == (tmp_path / "cli" / "grasps.json").read_bytes()
     assert result.frame == "rendered"
     assert result.physics is not None and result.physics["success"]
     assert result.analytic is not None and result.analytic["collision_free"]
-    assert set(result.timings) == {"render_s", "fuse_s", "plan_s", "check_s", "total_s"}
+    assert set(result.timings) == {"render_s", "depth_s", "fuse_s", "plan_s", "check_s", "total_s"}
     (view,) = result.views  # the top-down GQ-CNN plans in the top-down view
     assert view.elevation_deg == pytest.approx(90.0)
     assert view.candidates is not None and view.candidates > 0
@@ -78,6 +79,16 @@ def test_planning_on_a_mesh_matches_the_cli_and_checks_in_physics(tmp_path: Path
     assert fused.best is not None and fused.best.view_quality is not None
     with pytest.raises(ValueError, match="views = 11"):
         mvgrasp.Planner().plan_mesh(vertices, triangles, views=11)
+    # The CLI's default: depth predicted by the LSM from the colour views, the same bytes.
+    plan_cli("--category", "box", "--no-physics", "--out", str(tmp_path / "lsm"))
+    learnt = mvgrasp.Planner(fuse=True).plan_mesh(vertices, triangles, physics=False,
+                                                  depth_from="lsm")  # fmt: skip
+    assert learnt.grasps_json.encode() == (tmp_path / "lsm" / "grasps.json").read_bytes()
+    assert learnt.timings["depth_s"] > 0 and len(learnt.views) == 5
+    with pytest.raises(ValueError, match="multi-view planner"):
+        mvgrasp.Planner().plan_mesh(vertices, triangles, depth_from="lsm")
+    with pytest.raises(ValueError, match="depth_from"):
+        mvgrasp.Planner(fuse=True).plan_mesh(vertices, triangles, depth_from="stereo")
     with pytest.raises(mvgrasp.CameraError, match="kinect"):
         mvgrasp.Planner().plan_mesh(vertices, triangles, camera="kinect")
 
@@ -138,9 +149,10 @@ def test_planning_on_rgb_views_writes_the_cli_grasps_json_byte_for_byte(tmp_path
     masks = [np.rint(imread(folder / f"{i:03}_mask.png") * 255) == 1
              for i in range(len(cameras))]  # fmt: skip
     result = mvgrasp.Planner().plan_rgb(images, cameras, masks=masks)
-    # The depth it planned on: the top-down view's box to a millimetre (median).
+    # The baseline's depth: the top-down view's box to a millimetre (median).
     depth = mvgrasp.predict_depth(images[:5], [c.k for c in cameras[:5]],
-                                  [c.world_from_camera for c in cameras[:5]], masks=masks[:5])  # fmt: skip
+                                  [c.world_from_camera for c in cameras[:5]], masks=masks[:5],
+                                  depth_from="baseline")  # fmt: skip
     truth = mvgrasp.read_rgbd_folder(folder)["depth"][0]
     assert depth.shape == (5, 386, 516) and depth.dtype == np.float32
     on_box = masks[0] & (depth[0] > 0)
@@ -149,8 +161,13 @@ def test_planning_on_rgb_views_writes_the_cli_grasps_json_byte_for_byte(tmp_path
     assert result.grasps_json.encode() == (tmp_path / "cli" / "grasps.json").read_bytes()
     assert result.frame == "given" and len(result.views) == 10
     assert result.best is not None and result.best.view_quality is not None
+    # The LSM's (the default): every pixel predicted, the box's within the network's error.
+    learnt = mvgrasp.predict_depth(images[:5], [c.k for c in cameras[:5]],
+                                   [c.world_from_camera for c in cameras[:5]], masks=masks[:5])  # fmt: skip
+    assert learnt.shape == depth.shape and (learnt[0][masks[0]] > 0).all()
+    assert np.median(np.abs(learnt[0][masks[0]] - truth[masks[0]])) < 0.02
     with pytest.raises(ValueError, match="depth_from"):
-        mvgrasp.Planner().plan_rgb(images, cameras, depth_from="lsm")
+        mvgrasp.Planner().plan_rgb(images, cameras, depth_from="stereo")
     with pytest.raises(ValueError, match="at least 2 views"):
         mvgrasp.Planner().plan_rgb(images[:1], cameras[:1])
     with pytest.raises(ValueError, match=r"images\[0\]: shape"):

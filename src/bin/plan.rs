@@ -24,12 +24,11 @@ use mvgrasp::grasps_file::{GraspsFile, write_overlay};
 use mvgrasp::infer::Gqcnn;
 use mvgrasp::mcap_log::write_plan_log;
 use mvgrasp::planner::{
-    DepthFrom, GqcnnPolicy, ObjectSource, PlanOptions, PlanReport, ScoredGrasp, SensorFiles,
-    SensorPlanParams, SensorPlanReport, View, models, plan_grasp, plan_on_rgb_dir,
-    plan_on_sensor_depth, plan_on_views_dir,
+    DepthFrom, DepthPredictor, GqcnnPolicy, ObjectSource, PlanOptions, PlanParams, PlanReport,
+    ScoredGrasp, SensorFiles, SensorPlanParams, SensorPlanReport, View, models, plan_grasp,
+    plan_on_rgb_dir, plan_on_sensor_depth, plan_on_views_dir,
 };
 use mvgrasp::render::{Backend, Renderer};
-use mvgrasp::stereo::SweepParams;
 use mvgrasp::{ObjectReport, ReportParams};
 use serde::Serialize;
 
@@ -108,10 +107,14 @@ struct Args {
     /// then the multi-view planner (`--fuse` implied).
     #[arg(long, conflicts_with_all = ["depth", "mesh", "views", "distance_m", "stable_pose", "views_dir"])]
     rgb: Option<PathBuf>,
-    /// With --rgb, how depth is predicted: `baseline`, the classical plane sweep inside the
-    /// masks' visual hull (the Learnt Stereo Machine is not shipped yet).
-    #[arg(long, default_value = "baseline", requires = "rgb")]
-    depth_from: String,
+    /// How the depth planned on is made: `lsm`, predicted from RGB views by the shipped Learnt
+    /// Stereo Machine (at least 2 views); `baseline`, predicted by the classical plane sweep
+    /// inside the masks' visual hull; or, for a built-in object or a mesh, `rendered` (true
+    /// depth). Default `lsm`: on a mesh the views are rendered in colour (random colours), their
+    /// depth predicted, the multi-view planner plans on it (`--fuse` implied), and the summary
+    /// also gives the same run on the rendered depth.
+    #[arg(long, conflicts_with_all = ["depth", "views_dir"])]
+    depth_from: Option<String>,
     /// Write `grasps.json` (the ranked grasps with their poses; README, "grasps.json") and, for
     /// sensor depth, a picture of the best grasps over each view (`overlay_N.png`) and an MCAP
     /// log for robot tooling (`plan.mcap`: depth, calibrations, poses, table, grasps) into this
@@ -146,7 +149,12 @@ fn main() -> ExitCode {
 struct Report<'a> {
     object: &'a ObjectReport,
     model: &'a str,
+    /// `lsm`, `baseline` or `rendered`: the depth planned on.
+    depth_from: &'a str,
     plan: &'a PlanReport,
+    /// With depth from RGB: the same run on the rendered (true) depth.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    on_rendered_depth: Option<&'a PlanReport>,
 }
 
 /// Plans; `Ok(false)` when no grasp was found.
@@ -176,6 +184,7 @@ fn run(args: &Args) -> Result<bool, String> {
         distance_m: args.distance_m,
         stable_pose: args.stable_pose,
         physics: !args.no_physics,
+        depth_from: depth_from_of(args)?,
         ..options_of(args)
     };
     let (model_name, net) = load_model(&model_of(args))?;
@@ -188,11 +197,25 @@ fn run(args: &Args) -> Result<bool, String> {
     })?;
     let renderer = Renderer::new(backend).map_err(|e| e.to_string())?;
     let plan = plan_grasp(&renderer, &object.mesh, &policy, &params).map_err(|e| e.to_string())?;
+    // Depth from RGB: the same run on the rendered depth, beside it.
+    let on_truth = match params.depth_from_rgb {
+        Some(_) => {
+            let truth = PlanParams {
+                depth_from_rgb: None,
+                ..params.clone()
+            };
+            Some(plan_grasp(&renderer, &object.mesh, &policy, &truth).map_err(|e| e.to_string())?)
+        }
+        None => None,
+    };
+    let depth_from = options.depth_from.map_or("rendered", DepthFrom::name);
     if args.json {
         let report = Report {
             object: &description,
             model: &model_name,
+            depth_from,
             plan: &plan,
+            on_rendered_depth: on_truth.as_ref(),
         };
         let json = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
         println!("{json}");
@@ -205,9 +228,12 @@ fn run(args: &Args) -> Result<bool, String> {
                 policy.net(),
                 &plan,
                 params.views.radius_m,
-                args.fuse
+                options.fuse
             )
         );
+        if let (Some(from), Some(truth)) = (options.depth_from, &on_truth) {
+            print!("{}", truth_comparison(from, &plan, truth));
+        }
     }
     if let Some(out) = &args.out {
         write_outputs(out, &GraspsFile::of_rendered(&plan), &[], &[])?;
@@ -238,11 +264,38 @@ fn write_outputs(
     Ok(())
 }
 
+/// How a summary names a depth predictor.
+fn depth_from_words(from: DepthFrom) -> &'static str {
+    match from {
+        DepthFrom::Lsm => "the Learnt Stereo Machine (models/lsm_small)",
+        DepthFrom::Baseline => "the plane-sweep baseline",
+    }
+}
+
+/// `--depth-from`: the predictor, or `None` for rendered depth (a mesh only).
+fn depth_from_of(args: &Args) -> Result<Option<DepthFrom>, String> {
+    match args.depth_from.as_deref() {
+        None => Ok(Some(DepthFrom::Lsm)),
+        Some("rendered") if args.rgb.is_none() => Ok(None),
+        Some(name) => name.parse().map(Some).map_err(|e| {
+            let rendered = if args.rgb.is_none() {
+                ", or rendered"
+            } else {
+                ""
+            };
+            format!("--depth-from: {e}{rendered}")
+        }),
+    }
+}
+
 /// The options every kind of plan shares.
 fn options_of(args: &Args) -> PlanOptions {
+    // Depth from RGB goes to the multi-view planner.
+    let from_rgb = args.depth.is_none()
+        && args.views_dir.is_none()
+        && depth_from_of(args).is_ok_and(|d| d.is_some());
     PlanOptions {
-        // Views from RGB go to the multi-view planner.
-        fuse: args.fuse || args.rgb.is_some(),
+        fuse: args.fuse || from_rgb,
         cem: args.cem,
         hand_check: !args.no_hand_check,
         seed: args.object.seed,
@@ -296,14 +349,13 @@ fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
     use std::fmt::Write;
     let (model_name, policy, gripper, params) = sensor_setup(args)?;
     let (report, depth) = if args.rgb.is_some() {
-        let DepthFrom::Baseline = args
-            .depth_from
-            .parse::<DepthFrom>()
-            .map_err(|e| format!("--depth-from: {e}"))?;
-        let rgb = plan_on_rgb_dir(&policy, &gripper, dir, &params, &SweepParams::default())
+        let from = depth_from_of(args)?.unwrap_or(DepthFrom::Lsm);
+        let predictor = DepthPredictor::shipped(from).map_err(|e| e.to_string())?;
+        let rgb = plan_on_rgb_dir(&policy, &gripper, dir, &params, &predictor)
             .map_err(|e| e.to_string())?;
         let depth = format!(
-            "depth: predicted from RGB by the plane-sweep baseline in {:.2} s\n",
+            "depth: predicted from RGB by {} in {:.2} s\n",
+            depth_from_words(from),
             rgb.depth_s
         );
         (rgb.plan, depth)
@@ -501,6 +553,37 @@ fn load_model(model: &str) -> Result<(String, Gqcnn), String> {
         "--model: {model:?} is neither a shipped network ({}) nor an export's .json",
         names.join(", ")
     ))
+}
+
+/// One line for a plan's best grasp: its quality, robust label and physics verdict.
+fn verdict(plan: &PlanReport) -> String {
+    let Some(best) = &plan.best else {
+        return "no grasp".into();
+    };
+    let robust = plan
+        .analytic
+        .as_ref()
+        .map_or("", |a| if a.robust { ", robust" } else { ", not robust" });
+    let physics = plan
+        .physics
+        .as_ref()
+        .map_or(String::new(), |o| match o.failed_at {
+            None => ", held in physics".into(),
+            Some(stage) => format!(", failed in physics at {stage:?}"),
+        });
+    format!("quality {:.3}{robust}{physics}", best.quality)
+}
+
+/// The plan on predicted depth beside the same run on the rendered depth.
+fn truth_comparison(from: DepthFrom, plan: &PlanReport, truth: &PlanReport) -> String {
+    format!(
+        "depth: rendered in colour and predicted by {} in {:.2} s of the render time above\n\
+         on the rendered (true) depth, the same run: {} (on the predicted depth: {})\n",
+        depth_from_words(from),
+        plan.timings.depth_s,
+        verdict(truth),
+        verdict(plan)
+    )
 }
 
 fn summary(model: &str, net: &Gqcnn, plan: &PlanReport, distance_m: f32, fused: bool) -> String {

@@ -18,7 +18,8 @@ pub use pipeline::{
     plan_grasp, render_rgb, render_scene,
 };
 pub use rgb::{
-    DepthFrom, RgbPlanReport, plan_on_rgb_dir, plan_on_rgb_views, predict_views, read_rgb_dir,
+    DepthFrom, DepthPredictor, RgbPlanReport, plan_on_rgb_dir, plan_on_rgb_views, predict_views,
+    read_rgb_dir,
 };
 pub use sensor::{
     ObjectSource, SensorFiles, SensorPlanParams, SensorPlanReport, ViewsPlanReport,

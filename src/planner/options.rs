@@ -1,7 +1,8 @@
 //! The options of a plan, shared by the `plan` command and the Python `Planner`, and the one
 //! place that turns them into a policy and its settings: the network's default, fusion and the
 //! virtual re-scoring, CEM, the hand check and the seed; for a rendered mesh also the camera,
-//! how many views how far away, the resting pose and the physics check.
+//! how many views how far away, the resting pose, the physics check and whether depth is
+//! rendered or predicted from rendered RGB views.
 
 use mvgrasp_geometry::{Intrinsics, IntrinsicsPreset};
 use mvgrasp_grasp::Gripper;
@@ -9,7 +10,7 @@ use mvgrasp_infer::Gqcnn;
 use mvgrasp_planner::{CemParams, FusionParams, GqcnnPolicy, ViewSetting, VirtualScorer, models};
 
 use crate::error::{Error, Result};
-use crate::planner::{PlanParams, SensorPlanParams};
+use crate::planner::{DepthFrom, DepthPredictor, PlanParams, RgbInput, SensorPlanParams};
 
 /// Views the multi-view planner fuses unless told otherwise (the seed paper's setting, the
 /// first top-down).
@@ -38,6 +39,9 @@ pub struct PlanOptions {
     pub stable_pose: usize,
     /// On a mesh: run the rapier trial on the chosen grasp.
     pub physics: bool,
+    /// On a mesh: render the views in colour and plan on depth predicted from them by this
+    /// predictor (the multi-view planner: needs `fuse`); `None`: on the rendered depth.
+    pub depth_from: Option<DepthFrom>,
 }
 
 impl Default for PlanOptions {
@@ -52,6 +56,7 @@ impl Default for PlanOptions {
             distance_m: None,
             stable_pose: 0,
             physics: true,
+            depth_from: None,
         }
     }
 }
@@ -126,6 +131,26 @@ impl PlanOptions {
                 name: "distance_m",
                 value: distance_m.to_string(),
                 expected: "a distance in metres above 0",
+            });
+        }
+        if let Some(from) = self.depth_from {
+            if views < 2 {
+                return Err(Error::PlanOption {
+                    name: "views",
+                    value: views.to_string(),
+                    expected: "at least 2 views to predict depth from RGB",
+                });
+            }
+            if !self.fuse {
+                return Err(Error::PlanOption {
+                    name: "depth_from",
+                    value: from.name().into(),
+                    expected: "the multi-view planner (fuse) to plan on depth from RGB views",
+                });
+            }
+            params.depth_from_rgb = Some(RgbInput {
+                depth: DepthPredictor::shipped(from)?,
+                per_face: false,
             });
         }
         params.max_views = views;

@@ -16,8 +16,8 @@ use crate::dataset::{OBJECT_ID, SceneData, TABLE_HALF_SIDE_M, splitmix};
 use crate::error::Result;
 use crate::grasp_dataset::GraspDatasetConfig;
 use crate::grasp_dataset::object::render_depths;
-use crate::planner::rgb::predict_views;
-use crate::stereo::{RgbView, SweepParams};
+use crate::planner::rgb::{DepthPredictor, predict_views};
+use crate::stereo::RgbView;
 use mvgrasp_planner::{Fusion, FusionParams, GqcnnPolicy, Rejections, ScoredGrasp, View};
 
 /// The best candidates a report lists (and the hand check makes sure of).
@@ -49,7 +49,7 @@ pub struct PlanParams {
     pub hand_check: bool,
     /// Plan on depth predicted from RGB instead of the rendered depth: the views are rendered
     /// in colour (random colours, as the RGB-D datasets' test views) with the object's masks,
-    /// and each view's depth comes from the others ([`crate::stereo`]); the masks go with the
+    /// and each view's depth is predicted ([`RgbInput::depth`]); the masks go with the
     /// views. `None`: the rendered depth.
     pub depth_from_rgb: Option<RgbInput>,
     /// Fuse the views ([`Fusion`]) before the hand check: the open hand must also stay out of
@@ -81,8 +81,8 @@ impl Default for PlanParams {
 /// How [`PlanParams::depth_from_rgb`] colours the object and predicts depth.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RgbInput {
-    /// The plane sweep's settings.
-    pub sweep: SweepParams,
+    /// The depth predictor.
+    pub depth: DepthPredictor,
     /// Random colours per triangle (as half the RGB-D datasets' objects) instead of per vertex
     /// (interpolated across the faces).
     pub per_face: bool,
@@ -151,6 +151,8 @@ pub struct PlanTimings {
     /// Rendering the views' depth (with [`PlanParams::depth_from_rgb`]: rendering them in
     /// colour and predicting their depth).
     pub render_s: f64,
+    /// Predicting the views' depth from RGB (part of `render_s`; 0 for rendered depth).
+    pub depth_s: f64,
     /// Fusing the views (part of `plan_s`).
     pub fuse_s: f64,
     /// Fusing, sampling, cropping and scoring in every view, the hand check and re-scoring.
@@ -171,6 +173,8 @@ pub struct Scene {
     pub table_from_object: Pose3,
     /// The views, each a camera and its depth image.
     pub views: Vec<View>,
+    /// Seconds spent predicting the views' depth from RGB (0 for rendered depth).
+    pub depth_s: f64,
 }
 
 /// Rests `object` on the table in the offered pose `params.stable_pose` and renders the depth
@@ -192,6 +196,7 @@ pub fn render_scene(
         .views
         .cameras(params.intrinsics, target, params.seed)?;
     cameras.truncate(params.max_views.max(1));
+    let mut depth_s = 0.0;
     let views = match &params.depth_from_rgb {
         None => render_depths(renderer, mesh, &table_from_object, &cameras)?
             .into_iter()
@@ -211,7 +216,10 @@ pub fn render_scene(
             .into_iter()
             .map(|(view, _)| view)
             .collect();
-            predict_views(&views, &rgb.sweep)?
+            let started = Instant::now();
+            let predicted = predict_views(&views, &rgb.depth)?;
+            depth_s = started.elapsed().as_secs_f64();
+            predicted
         }
     };
     Ok(Scene {
@@ -219,6 +227,7 @@ pub fn render_scene(
         stable_pose_probability: pose.probability,
         table_from_object,
         views,
+        depth_s,
     })
 }
 
@@ -387,6 +396,7 @@ pub fn plan_grasp(
         physics: label.and_then(|l| l.physics),
         timings: PlanTimings {
             render_s,
+            depth_s: scene.depth_s,
             fuse_s,
             plan_s,
             check_s,

@@ -4,14 +4,18 @@
 //! A folder holds `cameras.json` (the cameras, posed in the table frame, as `render` writes
 //! them) and per camera `NNN_rgb.png` (8-bit RGB), optionally `NNN_mask.png` (the object's
 //! pixels; a `render` dataset's `train` or `test` folder is one). Depth comes from the
-//! classical baseline ([`crate::stereo`]); the Learnt Stereo Machine takes the same seam.
+//! Learnt Stereo Machine ([`crate::lsm`], the shipped `models/lsm_small`) or the classical
+//! baseline ([`crate::stereo`]): a [`DepthPredictor`].
 
 use std::path::Path;
+use std::sync::Arc;
 use std::time::Instant;
 
-use mvgrasp_planner::{DepthImage, GqcnnPolicy, Mask, View};
+use mvgrasp_infer::{Lsm, Parallelism};
+use mvgrasp_planner::{DepthImage, GqcnnPolicy, Mask, View, models};
 
 use crate::error::Result;
+use crate::lsm::lsm_depths;
 use crate::planner::sensor::{mismatch, read_cameras_json, render_conventions};
 use crate::planner::{SensorPlanParams, ViewsPlanReport, plan_on_views};
 use crate::sensor_files::{read_mask_of, read_rgb};
@@ -82,15 +86,15 @@ pub fn read_rgb_dir(dir: &Path) -> Result<Vec<RgbView>> {
 /// The planner's views of RGB views: each camera with its predicted depth (and its mask).
 ///
 /// # Errors
-/// See [`sweep_depths`].
-pub fn predict_views(rgb: &[RgbView], sweep: &SweepParams) -> Result<Vec<View>> {
-    let depths = sweep_depths(rgb, sweep)?;
+/// See [`DepthPredictor::depths`].
+pub fn predict_views(rgb: &[RgbView], predictor: &DepthPredictor) -> Result<Vec<View>> {
+    let depths = predictor.depths(rgb)?;
     rgb.iter()
         .zip(depths)
         .enumerate()
         .map(|(i, (view, depth))| {
             let k = view.camera.intrinsics;
-            let mut planned = View::new(i, view.camera, DepthImage::new(k, depth.depth_m)?)?;
+            let mut planned = View::new(i, view.camera, DepthImage::new(k, depth)?)?;
             if let Some(mask) = &view.mask {
                 planned = planned.with_mask(Mask::new(k.width, k.height, mask.clone())?)?;
             }
@@ -99,9 +103,11 @@ pub fn predict_views(rgb: &[RgbView], sweep: &SweepParams) -> Result<Vec<View>> 
         .collect()
 }
 
-/// How the depth of RGB views is predicted (`plan --depth-from`).
+/// Which depth predictor (`plan --depth-from`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum DepthFrom {
+    /// The Learnt Stereo Machine, the shipped weights ([`crate::lsm`]).
+    Lsm,
     /// The classical baseline: silhouette carving and a plane sweep ([`crate::stereo`]).
     Baseline,
 }
@@ -111,10 +117,79 @@ impl std::str::FromStr for DepthFrom {
 
     fn from_str(name: &str) -> std::result::Result<Self, String> {
         match name {
+            "lsm" => Ok(Self::Lsm),
             "baseline" => Ok(Self::Baseline),
-            other => Err(format!(
-                "{other:?}, expected baseline (the Learnt Stereo Machine is not shipped yet)"
+            other => Err(format!("{other:?}, expected lsm or baseline")),
+        }
+    }
+}
+
+impl DepthFrom {
+    /// Its name on the command line and in summaries.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Lsm => "lsm",
+            Self::Baseline => "baseline",
+        }
+    }
+}
+
+/// A depth predictor, ready to run: the baseline's settings or a loaded LSM.
+#[derive(Clone, Debug)]
+pub enum DepthPredictor {
+    /// The classical baseline with these settings.
+    Baseline(SweepParams),
+    /// A Learnt Stereo Machine.
+    Lsm(Arc<Lsm>),
+}
+
+impl PartialEq for DepthPredictor {
+    /// The same baseline settings, or the same loaded network.
+    fn eq(&self, other: &Self) -> bool {
+        match (self, other) {
+            (Self::Baseline(a), Self::Baseline(b)) => a == b,
+            (Self::Lsm(a), Self::Lsm(b)) => Arc::ptr_eq(a, b),
+            _ => false,
+        }
+    }
+}
+
+impl DepthPredictor {
+    /// The shipped predictor of `from`: the baseline with its default settings, or the shipped
+    /// LSM on every thread of rayon's pool (as the baseline runs).
+    ///
+    /// # Errors
+    /// Only if the shipped weights are broken (a test loads them).
+    pub fn shipped(from: DepthFrom) -> Result<Self> {
+        Ok(match from {
+            DepthFrom::Baseline => Self::Baseline(SweepParams::default()),
+            DepthFrom::Lsm => Self::Lsm(Arc::new(
+                models::LSM
+                    .load()?
+                    .with_parallelism(Parallelism::all_threads()),
             )),
+        })
+    }
+
+    /// Which kind it is.
+    pub fn kind(&self) -> DepthFrom {
+        match self {
+            Self::Baseline(_) => DepthFrom::Baseline,
+            Self::Lsm(_) => DepthFrom::Lsm,
+        }
+    }
+
+    /// The depth of every view at its resolution (metres; 0: not predicted), in order.
+    ///
+    /// # Errors
+    /// See [`sweep_depths`] and [`lsm_depths`].
+    pub fn depths(&self, views: &[RgbView]) -> Result<Vec<Vec<f32>>> {
+        match self {
+            Self::Baseline(sweep) => Ok(sweep_depths(views, sweep)?
+                .into_iter()
+                .map(|d| d.depth_m)
+                .collect()),
+            Self::Lsm(lsm) => lsm_depths(lsm, views),
         }
     }
 }
@@ -137,25 +212,24 @@ pub fn plan_on_rgb_dir(
     gripper: &mvgrasp_grasp::Gripper,
     dir: &Path,
     params: &SensorPlanParams,
-    sweep: &SweepParams,
+    predictor: &DepthPredictor,
 ) -> Result<RgbPlanReport> {
-    plan_on_rgb_views(policy, gripper, &read_rgb_dir(dir)?, params, sweep)
+    plan_on_rgb_views(policy, gripper, &read_rgb_dir(dir)?, params, predictor)
 }
 
-/// Plans on RGB views: their depth predicted by the baseline ([`predict_views`]), then
-/// [`plan_on_views`].
+/// Plans on RGB views: their depth predicted ([`predict_views`]), then [`plan_on_views`].
 ///
 /// # Errors
-/// See [`sweep_depths`] and [`plan_on_views`].
+/// See [`DepthPredictor::depths`] and [`plan_on_views`].
 pub fn plan_on_rgb_views(
     policy: &GqcnnPolicy,
     gripper: &mvgrasp_grasp::Gripper,
     rgb: &[RgbView],
     params: &SensorPlanParams,
-    sweep: &SweepParams,
+    predictor: &DepthPredictor,
 ) -> Result<RgbPlanReport> {
     let started = Instant::now();
-    let views = predict_views(rgb, sweep)?;
+    let views = predict_views(rgb, predictor)?;
     let depth_s = started.elapsed().as_secs_f64();
     Ok(RgbPlanReport {
         plan: plan_on_views(policy, gripper, views, params)?,

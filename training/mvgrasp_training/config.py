@@ -191,6 +191,16 @@ class LsmTrainConfig(_Validated):
     learning_rate: float = _checked(_POSITIVE)
     threads: int = _checked(_NON_NEGATIVE, default=0)
     """torch intra-op threads (0: torch's default)."""
+    learning_rate_decay: float = _checked((lambda v: 0 < v <= 1, "in (0, 1]"), default=1.0)
+    """Factor applied to the learning rate per epoch from ``decay_from_epoch`` on."""
+    decay_from_epoch: int = _checked(_NON_NEGATIVE, default=0)
+    """The first epoch trained at ``learning_rate * learning_rate_decay``."""
+
+    def learning_rate_at(self, epoch: int) -> float:
+        """The learning rate of ``epoch`` (0-based): a function of the epoch alone, so that a
+        resumed run trains as one that never stopped."""
+        decayed = max(0, epoch + 1 - self.decay_from_epoch) if self.decay_from_epoch else 0
+        return self.learning_rate * self.learning_rate_decay**decayed
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,6 @@
 """Training the depth Learnt Stereo Machine on an mvgrasp RGB-D dataset (``render`` output).
 
-    python -m mvgrasp_training.train_lsm CONFIG.toml --out DIR
+    python -m mvgrasp_training.train_lsm CONFIG.toml --out DIR [--export models/NAME]
 
 The dataset is read through the wheel (``mvgrasp.read_rgbd_folder``: the Rust readers of
 ``plan --rgb``). Every object's training and test views are held in memory at the
@@ -12,7 +12,11 @@ views. Objects are split object-wise (``data.val_fraction`` held out, by the see
 L1 on depth over the pixels whose true depth lies inside the grid's depth range, in every input
 view. Adam; a checkpoint after every epoch (``DIR/checkpoint.pt``; a rerun resumes from it), the
 weights of the epoch with the lowest validation error on the object pixels kept
-(``DIR/best.pt``), and the learning curve in ``DIR/history.json``.
+(``DIR/best.pt``), and the learning curve in ``DIR/history.json``. Checkpoints are written to
+a ``.partial`` file first and renamed, so an interrupted run loses at most the epoch it was in.
+``--export`` writes the best weights for the Rust runtime (``export_lsm``: ``NAME.json`` and
+``NAME.safetensors``) with the training report in the JSON (config, dataset, code commit, torch
+version, selected epoch, validation figures, history); a finished run only exports.
 """
 
 from __future__ import annotations
@@ -24,13 +28,15 @@ import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+import mvgrasp
 import numpy as np
 import torch
 from torch.nn import functional as F
 
-import mvgrasp
 from mvgrasp_training.config import LsmExperimentConfig, load_config
+from mvgrasp_training.export import export_lsm
 from mvgrasp_training.lsm import LSM, LsmArchitecture, grid_centre, ray_depths, scale_intrinsics
+from mvgrasp_training.train import code_commit, dataset_record
 
 
 @dataclass
@@ -98,7 +104,7 @@ def batch(
     objects: list[tuple[str, list[Split]]], size: int, views: int, rng: np.random.Generator
 ) -> tuple[torch.Tensor, ...]:
     drawn = [draw(objects[rng.integers(len(objects))][1], views, rng) for _ in range(size)]
-    return tuple(torch.stack(parts) for parts in zip(*drawn))
+    return tuple(torch.stack(parts) for parts in zip(*drawn, strict=True))
 
 
 def valid_pixels(
@@ -134,6 +140,37 @@ def evaluate(
     return {key: total / max(count, 1) for key, (total, count) in errors.items()}
 
 
+def save_atomically(state: dict, path: Path) -> None:
+    """``torch.save`` to ``path.partial``, then renamed: a kill mid-write leaves the old file."""
+    partial = path.with_suffix(path.suffix + ".partial")
+    torch.save(state, partial)
+    partial.replace(path)
+
+
+def export_best(config: LsmExperimentConfig, out: Path, stem: Path) -> Path:
+    """The run's best weights (``out/best.pt``) exported for the Rust runtime, with the training
+    report in the JSON."""
+    best = torch.load(out / "best.pt", weights_only=False)
+    history = json.loads((out / "history.json").read_text())
+    net = LSM(LsmArchitecture(**best["arch"]))
+    net.load_state_dict(best["model"])
+    dataset = dataset_record(config.data.dataset_dir)
+    recorded_config = json.loads(json.dumps(asdict(config), default=str))
+    recorded_config["data"]["dataset_dir"] = dataset["path"]
+    selected = next(record for record in history if record["epoch"] == best["epoch"])
+    report = {
+        "config": recorded_config,
+        "dataset": dataset,
+        "code_commit": code_commit(),
+        "torch": torch.__version__,
+        "selected_epoch": best["epoch"],
+        "val": {k: v for k, v in selected.items() if k.endswith("_mm")},
+        "history": history,
+        "date": time.strftime("%Y-%m-%d"),
+    }
+    return export_lsm(net, stem, report)
+
+
 def train(config: LsmExperimentConfig, out: Path, log=print) -> dict[str, float]:
     """Trains (resuming from ``out/checkpoint.pt`` when there is one); the best validation
     figures."""
@@ -166,10 +203,14 @@ def train(config: LsmExperimentConfig, out: Path, log=print) -> dict[str, float]
     steps = max(1, config.train.samples_per_epoch // config.train.batch_size)
     for epoch in range(start_epoch, config.train.epochs):
         started = time.time()
+        for group in optimiser.param_groups:
+            group["lr"] = config.train.learning_rate_at(epoch)
         epoch_rng = np.random.default_rng([config.seed, epoch])
         total = 0.0
         for _ in range(steps):
-            rgb, depth, mask, k, pose = batch(train_objects, config.train.batch_size, views, epoch_rng)
+            rgb, depth, _mask, k, pose = batch(
+                train_objects, config.train.batch_size, views, epoch_rng
+            )
             valid = valid_pixels(depth, pose, arch)
             loss = (net(rgb, k, pose) - depth).abs()[valid].mean()
             optimiser.zero_grad()
@@ -184,8 +225,9 @@ def train(config: LsmExperimentConfig, out: Path, log=print) -> dict[str, float]
         score = figures.get("object_mm", record["train_l1_mm"])
         if score < best:
             best = score
-            torch.save({"model": net.state_dict(), "arch": asdict(arch), "epoch": epoch}, out / "best.pt")
-        torch.save(
+            state = {"model": net.state_dict(), "arch": asdict(arch), "epoch": epoch}
+            save_atomically(state, out / "best.pt")
+        save_atomically(
             {
                 "model": net.state_dict(),
                 "optimiser": optimiser.state_dict(),
@@ -203,10 +245,15 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("config", type=Path)
     parser.add_argument("--out", type=Path, required=True)
+    parser.add_argument(
+        "--export", type=Path, help="write the best weights as EXPORT.json/.safetensors"
+    )
     args = parser.parse_args(argv)
     config = load_config(args.config, LsmExperimentConfig)
     result = train(config, args.out, log=lambda line: print(line, flush=True))
     print(json.dumps(result))
+    if args.export is not None:
+        print(f"exported {export_best(config, args.out, args.export)}")
     return 0
 
 

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use mvgrasp_infer::Gqcnn;
+use mvgrasp_infer::{Gqcnn, Lsm};
 
 use crate::error::Result;
 
@@ -83,3 +83,31 @@ pub const ALL: [ShippedModel; 2] = [GQCNN_TOPDOWN, MVGQCNN];
 pub fn shipped(name: &str) -> Option<ShippedModel> {
     ALL.into_iter().find(|m| m.name == name)
 }
+
+/// A shipped Learnt Stereo Machine: its name and files.
+#[derive(Clone, Copy, Debug)]
+pub struct ShippedLsm {
+    /// The experiment's name (`training/configs/NAME.toml`).
+    pub name: &'static str,
+    description: &'static str,
+    weights: &'static [u8],
+}
+
+impl ShippedLsm {
+    /// The network, ready to predict depth.
+    ///
+    /// # Errors
+    /// Only if the shipped files are broken (a test loads them).
+    pub fn load(&self) -> Result<Lsm> {
+        let path = Path::new("models").join(format!("{}.json", self.name));
+        Ok(Lsm::from_bytes(self.description, self.weights, &path)?)
+    }
+}
+
+/// The Learnt Stereo Machine trained on the built-in objects' RGB-D dataset
+/// (`training/configs/lsm_small.toml`): depth from a few RGB views.
+pub const LSM: ShippedLsm = ShippedLsm {
+    name: "lsm_small",
+    description: include_str!("../../../models/lsm_small.json"),
+    weights: include_bytes!("../../../models/lsm_small.safetensors"),
+};

@@ -351,8 +351,10 @@ def plan_mesh(
     stable_pose: int = 0,
     physics: bool = True,
     backend: str = "auto",
+    depth_from: str = "rendered",
 ) -> dict[str, Any]:
-    """Plans a grasp on a mesh as ``plan --mesh`` does (rest, render, plan, check); returns
+    """Plans a grasp on a mesh as ``plan --mesh --depth-from DEPTH_FROM`` does (rest, render,
+    predict depth from the colour views with ``"lsm"`` or ``"baseline"``, plan, check); returns
     ``{"report", "grasps_json", "timings"}``: ``plan --json``'s plan report, the text of
     ``grasps.json`` and each stage's seconds. ``ValueError`` for a bad option value,
     ``CameraError`` for an unknown camera preset, ``RenderError``, ``WeightsError``."""
@@ -462,14 +464,15 @@ def plan_rgb(
     *,
     masks: Sequence[npt.NDArray[np.bool_] | None] | None = None,
     model: str | None = None,
-    depth_from: str = "baseline",
+    depth_from: str = "lsm",
     cem: bool = False,
     hand_check: bool = True,
     seed: int = 0,
     as_json: bool = False,
 ) -> Any:
-    """Plans a grasp on RGB views as ``plan --rgb`` does: depth predicted by the plane-sweep
-    baseline, then the multi-view planner. ``images``: ``(H, W, 3)`` uint8 per view, with their
+    """Plans a grasp on RGB views as ``plan --rgb`` does: depth predicted by the shipped Learnt
+    Stereo Machine (``depth_from="lsm"``) or the plane-sweep baseline (``"baseline"``), then
+    the multi-view planner. ``images``: ``(H, W, 3)`` uint8 per view, with their
     3x3 camera matrices and 4x4 poses in the table frame; ``masks``: the object's pixels or
     ``None`` per view. Returns ``grasps.json``'s content (with ``as_json``, its text)."""
 
@@ -484,7 +487,8 @@ def predict_depth(
     world_from_cameras: Sequence[npt.NDArray[np.float64]],
     *,
     masks: Sequence[npt.NDArray[np.bool_] | None] | None = None,
-    depth_from: str = "baseline",
+    depth_from: str = "lsm",
 ) -> npt.NDArray[np.float32]:
-    """Each RGB view's depth predicted from the others as ``plan --rgb`` predicts it: (V, H, W)
+    """Each RGB view's depth predicted from all of them as ``plan --rgb`` predicts it (``"lsm"``
+    or ``"baseline"``): (V, H, W)
     float32 metres, 0 where unknown. The inputs are ``plan_rgb``'s."""

@@ -242,12 +242,12 @@ class Planner:
         cameras: Sequence[Camera],
         *,
         masks: Optional[Sequence[Optional[npt.ArrayLike]]] = None,
-        depth_from: str = "baseline",
+        depth_from: str = "lsm",
     ) -> PlanResult:
         """Plans on RGB views (``(H, W, 3)`` uint8, at least two) with their posed cameras (the
-        table frame: z up, the table at z = 0), as ``plan --rgb`` does: each view's depth
-        predicted from the others (``depth_from="baseline"``: silhouette carving and a plane
-        sweep; the Learnt Stereo Machine is not shipped yet), then the multi-view planner
+        table frame: z up, the table at z = 0), as ``plan --rgb`` does: the views' depth
+        predicted by the shipped Learnt Stereo Machine (``depth_from="lsm"``) or the classical
+        baseline (``"baseline"``: silhouette carving and a plane sweep), then the multi-view planner
         (``fuse`` is implied). ``masks``: per view the object's pixels, or ``None``."""
         started = time.perf_counter()
         options = self._options()
@@ -273,10 +273,14 @@ class Planner:
         stable_pose: int = 0,
         physics: bool = True,
         backend: str = "auto",
+        depth_from: str = "rendered",
     ) -> PlanResult:
-        """Plans on a mesh as ``plan --mesh`` does: rests it on the table in a stable pose,
-        renders the views' depth, plans, and checks the best grasp analytically and (with
-        ``physics``) in the rapier trial (:attr:`PlanResult.physics`). Timings per stage."""
+        """Plans on a mesh as ``plan --mesh --depth-from DEPTH_FROM`` does: rests it on the
+        table in a stable pose, renders the views' depth (``"rendered"``, the default here) or
+        renders them in colour and predicts their depth (``"lsm"``, the CLI's default, or
+        ``"baseline"``; the multi-view planner: ``fuse=True``), plans, and checks the best grasp
+        analytically and (with ``physics``) in the rapier trial (:attr:`PlanResult.physics`).
+        Timings per stage."""
         started = time.perf_counter()
         result = _native.plan_mesh(
             vertices,
@@ -287,6 +291,7 @@ class Planner:
             stable_pose=stable_pose,
             physics=physics,
             backend=backend,
+            depth_from=depth_from,
             **self._options(),
         )
         timings = dict(result["timings"], total_s=time.perf_counter() - started)
