@@ -86,7 +86,9 @@ def test_planning_on_a_mesh_matches_the_cli_and_checks_in_physics(tmp_path: Path
     assert learnt.grasps_json.encode() == (tmp_path / "lsm" / "grasps.json").read_bytes()
     assert learnt.timings["depth_s"] > 0 and len(learnt.views) == 5
     with pytest.raises(ValueError, match="multi-view planner"):
-        mvgrasp.Planner().plan_mesh(vertices, triangles, depth_from="lsm")
+        mvgrasp.Planner().plan_mesh(vertices, triangles, views=5, depth_from="lsm")
+    with pytest.raises(ValueError, match="at least 2 views"):
+        mvgrasp.Planner(fuse=True).plan_mesh(vertices, triangles, views=1, depth_from="lsm")
     with pytest.raises(ValueError, match="depth_from"):
         mvgrasp.Planner(fuse=True).plan_mesh(vertices, triangles, depth_from="stereo")
     with pytest.raises(mvgrasp.CameraError, match="kinect"):

@@ -57,7 +57,8 @@ class Tally:
         )
 
 
-def load_lsm(path: Path) -> LSM:
+def load_checkpoint(path: Path) -> LSM:
+    """A training run's weights (``RUN/best.pt``)."""
     state = torch.load(path, weights_only=False)
     net = LSM(LsmArchitecture(**state["arch"]))
     net.load_state_dict(state["model"])
@@ -88,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--threads", type=int, default=2)
     args = parser.parse_args(argv)
     torch.set_num_threads(args.threads)
-    net = load_lsm(args.weights)
+    net = load_checkpoint(args.weights)
     names = json.loads((args.dataset / "dataset.json").read_text())["objects"]
     methods = ("LSM", "baseline")
     tallies = {(m, n, s): Tally() for m in methods for n in args.views for s in ("top", "all")}
@@ -106,6 +107,7 @@ def main(argv: list[str] | None = None) -> int:
                 list(folder["k"][:n]),
                 list(folder["world_from_camera"][:n]),
                 masks=list(mask[:n]),
+                depth_from="baseline",
             )
             seconds[("baseline", n)] += time.perf_counter() - started
             for m in methods:

@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# Reproduces the shipped networks of models/ from a clean clone: the grasp datasets they were
-# trained on (training/configs/datasets/), the two training runs (training/configs/), the
-# exports copied into models/ and the torch-parity fixtures of the Rust tests rewritten.
+# Reproduces the shipped networks of models/ from a clean clone: the grasp and RGB-D datasets
+# they were trained on (training/configs/datasets/, `render`), the three training runs
+# (training/configs/), the exports copied into models/ and the torch-parity fixtures of the
+# Rust tests rewritten.
 #
-#   training/scripts/reproduce_shipped_models.sh            # about two hours on a 2-core CPU
+#   training/scripts/reproduce_shipped_models.sh            # about four hours on a 2-core CPU
 #   QUICK=1 training/scripts/reproduce_shipped_models.sh    # minutes: 1 object per category,
 #                                                           # 1 epoch, into a scratch folder;
 #                                                           # models/ is left alone
@@ -91,6 +92,19 @@ for name in gqcnn_small_topdown gqcnn_small_multiview; do
     [[ -f $runs/$name/$name.json ]] || { echo "training $name failed: see $runs/$name.log" >&2; exit 1; }
 done
 
+# The Learnt Stereo Machine: the RGB-D dataset of `render` (20 objects per category, library
+# seed 2: other shapes than the grasp datasets' and the evaluation's), then its run (about an
+# hour and a half here on its own), exported for the Rust runtime.
+cargo build --release --quiet --bin render
+target/release/render --quiet --per-category "$per_category" --library-seed 2 --out "$data/lsm"
+config=$runs/lsm_small.toml
+edits=(-e "s|^dataset_dir = .*|dataset_dir = \"$data/lsm\"|")
+[[ $quick == 1 ]] && edits+=(-e "s|^epochs = .*|epochs = 1|" -e "s|^samples_per_epoch = .*|samples_per_epoch = 8|")
+sed "${edits[@]}" training/configs/lsm_small.toml > "$config"
+"$python" -m mvgrasp_training.train_lsm "$config" --out "$runs/lsm_small" \
+    --export "$runs/lsm_small/lsm_small" > "$runs/lsm_small.log" 2>&1 \
+    || { echo "training lsm_small failed: see $runs/lsm_small.log" >&2; exit 1; }
+
 if [[ $quick == 1 ]]; then
     echo "QUICK=1: exports in $runs (models/ unchanged)"
     exit 0
@@ -99,5 +113,6 @@ for name in gqcnn_small_topdown gqcnn_small_multiview; do
     cp "$runs/$name/$name.json" "$runs/$name/$name.safetensors" models/
     cp "$runs/$name/learning_curve.png" "models/$name.png"
 done
+cp "$runs/lsm_small/lsm_small.json" "$runs/lsm_small/lsm_small.safetensors" models/
 "$python" training/scripts/make_parity_fixtures.py
 echo "models/ rewritten; next: cargo test (parity with torch), then re-measure models/README.md and the README's figures"

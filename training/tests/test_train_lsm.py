@@ -12,7 +12,8 @@ torch = pytest.importorskip("torch")
 
 from conftest import generate_rgbd_dataset  # noqa: E402
 from mvgrasp_training.config import ConfigError, LsmExperimentConfig, load_config  # noqa: E402
-from mvgrasp_training.train_lsm import load_dataset, train  # noqa: E402
+from mvgrasp_training.export import load_lsm  # noqa: E402
+from mvgrasp_training.train_lsm import export_best, load_dataset, train  # noqa: E402
 
 CONFIG = """name = "lsm_tiny"
 seed = 1
@@ -73,6 +74,27 @@ def test_training_writes_its_curve_and_resumes_from_its_checkpoint(dataset: Path
     second = train(config, out, log=lines.append)
     assert lines[0] == "resumed after epoch 1" and second["epochs"] == 2
     assert json.loads((out / "history.json").read_text())[0] == history[0]
+    assert not list(out.glob("*.partial")), "checkpoints are renamed into place"
+    # The export for the Rust runtime: the best weights, the report in the JSON.
+    json_path = export_best(config, out, tmp_path / "models" / "lsm_tiny")
+    net, description = load_lsm(json_path)
+    best = torch.load(out / "best.pt", weights_only=False)
+    assert description["format"] == "mvgrasp-lsm/1"
+    assert description["architecture"]["grid_size"] == 8
+    report = description["training"]
+    assert report["selected_epoch"] == best["epoch"] and len(report["history"]) == 2
+    assert report["val"]["object_mm"] == report["history"][best["epoch"]]["object_mm"]
+    assert report["config"]["data"]["dataset_dir"] == report["dataset"]["path"]
+    assert not report["dataset"]["path"].startswith("/"), "relative to the repository"
+    for name, tensor in net.state_dict().items():
+        assert torch.equal(tensor, best["model"][name]), name
+
+
+def test_the_learning_rate_decays_by_epoch_alone(dataset: Path, tmp_path: Path) -> None:
+    path = write_config(tmp_path / "d.toml", dataset, 4)
+    path.write_text(path.read_text().replace("threads = 1", "threads = 1\nlearning_rate_decay = 0.5\ndecay_from_epoch = 2"))
+    train_config = load_config(path, LsmExperimentConfig).train
+    assert [train_config.learning_rate_at(e) for e in range(4)] == [1e-3, 1e-3, 5e-4, 2.5e-4]
 
 
 def test_the_evaluation_prints_both_methods_on_the_same_views(
