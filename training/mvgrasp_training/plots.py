@@ -39,3 +39,33 @@ def plot_history(history: list[dict[str, Any]], path: str | Path, title: str = "
     fig.savefig(path)
     plt.close(fig)
     return path
+
+
+def plot_lsm_history(history: list[dict[str, Any]], path: str | Path, title: str = "") -> Path:
+    """Writes an LSM run's curve to ``path`` (a PNG): the training L1 and the validation mean
+    absolute depth error over the held-out objects' pixels and over all pixels in the grid's
+    range, millimetres per epoch; returns the path."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    epochs = [h["epoch"] for h in history]
+    fig, ax = plt.subplots(figsize=(7, 4), dpi=100)
+    for key, label in (
+        ("train_l1_mm", "training L1 (all pixels in range)"),
+        ("object_mm", "validation MAE, object pixels"),
+        ("all_mm", "validation MAE, all pixels in range"),
+    ):
+        ax.plot(epochs, [h.get(key) for h in history], marker="o", markersize=3, label=label)
+    ax.set_xlabel("epoch")
+    ax.set_ylabel("depth error (mm)")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    if title:
+        ax.set_title(title)
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path)
+    plt.close(fig)
+    return path

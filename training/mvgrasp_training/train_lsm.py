@@ -36,6 +36,7 @@ from torch.nn import functional as F
 from mvgrasp_training.config import LsmExperimentConfig, load_config
 from mvgrasp_training.export import export_lsm
 from mvgrasp_training.lsm import LSM, LsmArchitecture, grid_centre, ray_depths, scale_intrinsics
+from mvgrasp_training.plots import plot_lsm_history
 from mvgrasp_training.train import code_commit, dataset_record
 
 
@@ -149,7 +150,7 @@ def save_atomically(state: dict, path: Path) -> None:
 
 def export_best(config: LsmExperimentConfig, out: Path, stem: Path) -> Path:
     """The run's best weights (``out/best.pt``) exported for the Rust runtime, with the training
-    report in the JSON."""
+    report in the JSON; the learning curve drawn to ``out/learning_curve.png``."""
     best = torch.load(out / "best.pt", weights_only=False)
     history = json.loads((out / "history.json").read_text())
     net = LSM(LsmArchitecture(**best["arch"]))
@@ -168,6 +169,7 @@ def export_best(config: LsmExperimentConfig, out: Path, stem: Path) -> Path:
         "history": history,
         "date": time.strftime("%Y-%m-%d"),
     }
+    plot_lsm_history(history, out / "learning_curve.png", title=config.name)
     return export_lsm(net, stem, report)
 
 

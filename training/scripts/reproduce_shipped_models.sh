@@ -114,5 +114,6 @@ for name in gqcnn_small_topdown gqcnn_small_multiview; do
     cp "$runs/$name/learning_curve.png" "models/$name.png"
 done
 cp "$runs/lsm_small/lsm_small.json" "$runs/lsm_small/lsm_small.safetensors" models/
+cp "$runs/lsm_small/learning_curve.png" models/lsm_small.png
 "$python" training/scripts/make_parity_fixtures.py
 echo "models/ rewritten; next: cargo test (parity with torch), then re-measure models/README.md and the README's figures"

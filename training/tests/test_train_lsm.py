@@ -77,6 +77,7 @@ def test_training_writes_its_curve_and_resumes_from_its_checkpoint(dataset: Path
     assert not list(out.glob("*.partial")), "checkpoints are renamed into place"
     # The export for the Rust runtime: the best weights, the report in the JSON.
     json_path = export_best(config, out, tmp_path / "models" / "lsm_tiny")
+    assert (out / "learning_curve.png").stat().st_size > 1000
     net, description = load_lsm(json_path)
     best = torch.load(out / "best.pt", weights_only=False)
     assert description["format"] == "mvgrasp-lsm/1"
