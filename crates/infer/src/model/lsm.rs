@@ -11,6 +11,7 @@
 
 use std::path::Path;
 
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{InferError, Result};
@@ -344,12 +345,23 @@ impl Lsm {
         }
         let mut grid_features = self.refine_out.run(&up, par)?;
         grid_features.reshape(&[g, s, s, s])?;
-        let mut rays = Tensor::zeros(&[views, g * a.ray_samples, hh, hw]);
-        let ray_len = g * a.ray_samples * hh * hw;
-        for (view, camera) in half_cameras.iter().enumerate() {
-            let r = project_rays(&grid_features, camera, &grid, a.ray_samples, hh, hw)?;
-            rays.data_mut()[view * ray_len..(view + 1) * ray_len].copy_from_slice(r.data());
+        // The views' rays, on the threads `par` allows (each view the same whatever the split).
+        let project = |camera: &CameraMatrices| {
+            project_rays(&grid_features, camera, &grid, a.ray_samples, hh, hw)
+        };
+        let projected: Vec<Tensor> = if par.threads() > 1 {
+            half_cameras
+                .par_iter()
+                .map(project)
+                .collect::<Result<_>>()?
+        } else {
+            half_cameras.iter().map(project).collect::<Result<_>>()?
+        };
+        let mut rays = Vec::with_capacity(views * g * a.ray_samples * hh * hw);
+        for r in &projected {
+            rays.extend_from_slice(r.data());
         }
+        let rays = Tensor::new(&[views, g * a.ray_samples, hh, hw], rays)?;
         let y = self.from_rays.run(&rays, par)?;
         let y = self.decode_half.run(&concat(&[&y, &half], 1)?, par)?;
         let y = resize_bilinear(&y, h, w)?;

@@ -314,7 +314,15 @@ pub fn project_rays(
     let plane = height * width;
     let voxels = s * s * s;
     let mut out = Tensor::zeros(&[c * samples, height, width]);
-    let (x, y) = (features.data(), out.data_mut());
+    // Channels last, so that a tap reads its voxel's channels from one place.
+    let mut last = vec![0.0f32; voxels * c];
+    for (channel, volume) in features.data().chunks_exact(voxels).enumerate() {
+        for (i, &v) in volume.iter().enumerate() {
+            last[i * c + channel] = v;
+        }
+    }
+    let y = out.data_mut();
+    let mut values = vec![0.0f32; c];
     let k = &camera.k;
     let inv_step = s as f32 / grid.side_m;
     let half = s as f32 / 2.0 - 0.5;
@@ -352,9 +360,13 @@ pub fn project_rays(
                 if count == 0 {
                     continue;
                 }
-                for channel in 0..c {
-                    let volume = &x[channel * voxels..(channel + 1) * voxels];
-                    let value: f32 = taps[..count].iter().map(|&(i, wt)| wt * volume[i]).sum();
+                values.fill(0.0);
+                for &(i, wt) in &taps[..count] {
+                    for (v, &f) in values.iter_mut().zip(&last[i * c..(i + 1) * c]) {
+                        *v += wt * f;
+                    }
+                }
+                for (channel, &value) in values.iter().enumerate() {
                     y[(channel * samples + j) * plane + row * width + col] = value;
                 }
             }
