@@ -50,7 +50,11 @@ mod tests {
         // Saturated: exactly 0 or 1 past |x| = 40, the formula's value just inside.
         let mut edge = Tensor::new(&[3], vec![-39.9, -40.1, 40.1]).unwrap();
         sigmoid(&mut edge);
-        assert!(edge.data()[0].is_normal() && edge.data()[0] < 5e-18, "{:?}", edge.data());
+        assert!(
+            edge.data()[0].is_normal() && edge.data()[0] < 5e-18,
+            "{:?}",
+            edge.data()
+        );
         assert_eq!((edge.data()[1], edge.data()[2]), (0.0, 1.0));
         let mut t = Tensor::new(&[3], vec![0.0, 0.5, -30.0]).unwrap();
         tanh(&mut t);

@@ -98,7 +98,11 @@ fn image(
         let slices = start..(start + band).min(g.output[0]);
         let n = slices.len() * slice;
         let col = &mut col[..rows * n];
-        unfold(g, x, col, slices);
+        if is_same_shape(g) {
+            unfold_same_shape(g, x, col, slices);
+        } else {
+            unfold(g, x, col, slices);
+        }
         matmul_rows(
             "conv3d",
             &mut y[start * slice..],
@@ -112,6 +116,73 @@ fn image(
         )?;
     }
     Ok(())
+}
+
+/// Whether the convolution has stride 1 and an output the shape of its input (a "same"
+/// convolution: `k = 2 p + 1` along every axis), the case [`unfold_same_shape`] handles.
+fn is_same_shape(g: &Geometry) -> bool {
+    g.stride == [1; 3] && g.output == g.input
+}
+
+/// [`unfold`] for [`is_same_shape`] convolutions. Output position `p` of row
+/// `(c, kz, ky, kx)` then reads input value `p + shift` of volume `c`, with
+/// `shift = (kz - pz) h w + (ky - py) w + kx - px`: the row is the volume shifted, one copy
+/// per row of `col` instead of one per output row, after which only the slices and rows off
+/// the input and the `|kx - px|` columns of each row that the shift wraps round from a
+/// neighbouring row are zeroed. The values are those [`unfold`] writes.
+fn unfold_same_shape(g: &Geometry, x: &[f32], col: &mut [f32], band: Range<usize>) {
+    let [d, h, w] = g.input;
+    let hw = h * w;
+    let [pz, py, px] = g.padding.map(|p| p as isize);
+    let base = band.start * hw;
+    let positions = band.len() * hw;
+    let mut rows = col.chunks_exact_mut(positions);
+    for volume in x.chunks_exact(d * hw).take(g.c) {
+        for kz in 0..g.kernel[0] as isize {
+            let dz = kz - pz;
+            // Output slices whose input slice oz + dz lies inside.
+            let (start, end) = (band.start as isize, band.end as isize);
+            let z_lo = (-dz).clamp(start, end);
+            let z_hi = (d as isize - dz).clamp(z_lo, end);
+            let (z_lo, z_hi) = (z_lo as usize, z_hi as usize);
+            for ky in 0..g.kernel[1] as isize {
+                let dy = ky - py;
+                for kx in 0..g.kernel[2] as isize {
+                    let dx = kx - px;
+                    let Some(row) = rows.next() else { return };
+                    let shift = dz * hw as isize + dy * w as isize + dx;
+                    let (lo, hi) = (z_lo * hw, z_hi * hw);
+                    row[..lo - base].fill(0.0);
+                    row[hi - base..].fill(0.0);
+                    if lo >= hi {
+                        continue;
+                    }
+                    // Positions whose input index falls off the volume are in wrapped rows or
+                    // columns, zeroed below.
+                    let first = lo.max((-shift).max(0) as usize);
+                    let last = hi.min(((d * hw) as isize - shift).max(0) as usize);
+                    if first < last {
+                        let from = (first as isize + shift) as usize;
+                        row[first - base..last - base]
+                            .copy_from_slice(&volume[from..from + (last - first)]);
+                    }
+                    for slice in row[lo - base..hi - base].chunks_exact_mut(hw) {
+                        // Rows oy + dy off the input, then columns ox + dx off it.
+                        let y_lo = (-dy).max(0) as usize;
+                        let y_hi = (h as isize - dy).clamp(0, h as isize) as usize;
+                        slice[..y_lo.min(h) * w].fill(0.0);
+                        slice[y_hi.max(y_lo.min(h)) * w..].fill(0.0);
+                        let x_lo = (-dx).max(0) as usize;
+                        let x_hi = (w as isize - dx).clamp(0, w as isize) as usize;
+                        for out_row in slice.chunks_exact_mut(w) {
+                            out_row[..x_lo.min(w)].fill(0.0);
+                            out_row[x_hi.max(x_lo.min(w))..].fill(0.0);
+                        }
+                    }
+                }
+            }
+        }
+    }
 }
 
 /// vol2col of output slices `band`: row `(c, kz, ky, kx)` of `col` holds, for every output
@@ -157,6 +228,48 @@ fn unfold(g: &Geometry, x: &[f32], col: &mut [f32], band: Range<usize>) {
                             }
                         }
                     }
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use super::*;
+    use crate::testing::Rng;
+
+    #[test]
+    fn same_shape_columns_are_the_general_ones() {
+        let mut rng = Rng::new(44);
+        // [c, d, h, w], kernel, padding with k = 2 p + 1; bands of every size.
+        for ([c, d, h, w], kernel, padding) in [
+            ([2, 5, 4, 6], [3, 3, 3], [1, 1, 1]),
+            ([1, 3, 3, 3], [5, 5, 5], [2, 2, 2]),
+            ([3, 4, 2, 5], [1, 3, 5], [0, 1, 2]),
+            ([1, 2, 6, 1], [3, 1, 3], [1, 0, 1]),
+        ] {
+            let input = rng.tensor(&[1, c, d, h, w]);
+            let weight = Tensor::zeros(&[1, c, kernel[0], kernel[1], kernel[2]]);
+            let params = Conv3dParams {
+                stride: [1; 3],
+                padding,
+            };
+            let (g, _) = Geometry::new(Kind::Direct, &input, &weight, None, params).unwrap();
+            assert!(is_same_shape(&g));
+            for band in [d, 1, 2] {
+                for start in (0..d).step_by(band) {
+                    let slices = start..(start + band).min(d);
+                    let len = c * g.taps() * slices.len() * h * w;
+                    let (mut fast, mut general) = (vec![f32::NAN; len], vec![f32::NAN; len]);
+                    unfold_same_shape(&g, input.data(), &mut fast, slices.clone());
+                    unfold(&g, input.data(), &mut general, slices.clone());
+                    assert_eq!(
+                        fast, general,
+                        "{c}x{d}x{h}x{w} kernel {kernel:?} {slices:?}"
+                    );
                 }
             }
         }
