@@ -203,7 +203,7 @@ def _best_accuracy(history: list[dict[str, Any]], best: dict[str, Any]) -> float
     return float(history[best["epoch"] - 1]["val"]["balanced_accuracy"])
 
 
-def _world() -> tuple[int, int]:
+def distributed_world() -> tuple[int, int]:
     """This process's rank and the number of processes (torchrun's environment; 0, 1 alone)."""
     return int(os.environ.get("RANK", "0")), int(os.environ.get("WORLD_SIZE", "1"))
 
@@ -213,7 +213,7 @@ def train(config: ExperimentConfig, out: Path, test_dir: Path | None = None) -> 
 
     Under torchrun every process calls this; process 0 writes the files.
     """
-    rank, world = _world()
+    rank, world = distributed_world()
     joined = world > 1 and not dist.is_initialized()
     if joined:
         dist.init_process_group("gloo")

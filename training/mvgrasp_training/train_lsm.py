@@ -1,6 +1,7 @@
 """Training the depth Learnt Stereo Machine on an mvgrasp RGB-D dataset (``render`` output).
 
     python -m mvgrasp_training.train_lsm CONFIG.toml --out DIR [--export models/NAME]
+    torchrun --standalone --nproc_per_node 2 -m mvgrasp_training.train_lsm CONFIG.toml --out DIR
 
 The dataset is read through the wheel (``mvgrasp.read_rgbd_folder``: the Rust readers of
 ``plan --rgb``). Every object's training and test views are held in memory at the
@@ -31,13 +32,15 @@ from pathlib import Path
 import mvgrasp
 import numpy as np
 import torch
+from torch import distributed as dist
+from torch import nn
 from torch.nn import functional as F
 
 from mvgrasp_training.config import LsmExperimentConfig, load_config
 from mvgrasp_training.export import export_lsm
 from mvgrasp_training.lsm import LSM, LsmArchitecture, grid_centre, ray_depths, scale_intrinsics
 from mvgrasp_training.plots import plot_lsm_history
-from mvgrasp_training.train import code_commit, dataset_record
+from mvgrasp_training.train import code_commit, dataset_record, distributed_world
 
 
 @dataclass
@@ -175,7 +178,25 @@ def export_best(config: LsmExperimentConfig, out: Path, stem: Path) -> Path:
 
 def train(config: LsmExperimentConfig, out: Path, log=print) -> dict[str, float]:
     """Trains (resuming from ``out/checkpoint.pt`` when there is one); the best validation
-    figures."""
+    figures. Under torchrun every process calls this (DistributedDataParallel on gloo, the
+    CPU's backend): each draws the same global batch and runs its share of the samples, the
+    loss normalised by the global batch's pixel count, so two processes train the weights one
+    does; process 0 writes the files."""
+    rank, world = distributed_world()
+    joined = world > 1 and not dist.is_initialized()
+    if joined:
+        dist.init_process_group("gloo")
+    try:
+        return _train(config, out, log, rank, world)
+    finally:
+        if joined:
+            dist.destroy_process_group()
+
+
+def _train(config: LsmExperimentConfig, out: Path, log, rank: int, world: int) -> dict[str, float]:
+    lead = rank == 0
+    if not lead:
+        log = lambda _line: None
     out.mkdir(parents=True, exist_ok=True)
     if config.train.threads:
         torch.set_num_threads(config.train.threads)
@@ -201,6 +222,8 @@ def train(config: LsmExperimentConfig, out: Path, log=print) -> dict[str, float]
         start_epoch = state["epoch"] + 1
         best = state["best"]
         log(f"resumed after epoch {start_epoch}")
+    model = nn.parallel.DistributedDataParallel(net) if world > 1 else net
+    mine = slice(rank, None, world)
     views = config.data.views_per_sample
     steps = max(1, config.train.samples_per_epoch // config.train.batch_size)
     for epoch in range(start_epoch, config.train.epochs):
@@ -214,19 +237,32 @@ def train(config: LsmExperimentConfig, out: Path, log=print) -> dict[str, float]
                 train_objects, config.train.batch_size, views, epoch_rng
             )
             valid = valid_pixels(depth, pose, arch)
-            loss = (net(rgb, k, pose) - depth).abs()[valid].mean()
+            error = (model(rgb[mine], k[mine], pose[mine]) - depth[mine]).abs()[valid[mine]]
+            if world == 1:
+                loss = error.mean()
+            else:
+                # DDP averages gradients over processes: scaled by `world`, the average is the
+                # gradient of the global batch's mean.
+                loss = error.sum() / valid.sum().clamp(min=1) * world
             optimiser.zero_grad()
             loss.backward()
             optimiser.step()
-            total += loss.item()
+            total += loss.item() / world
+        if world > 1:
+            summed = torch.tensor([total], dtype=torch.float64)
+            dist.all_reduce(summed)
+            total = float(summed[0])
         figures = evaluate(net, val, views, config.seed) if val else {}
         record = {"epoch": epoch, "train_l1_mm": 1e3 * total / steps, **figures}
         record["seconds"] = time.time() - started
         history.append(record)
         log(json.dumps(record))
         score = figures.get("object_mm", record["train_l1_mm"])
-        if score < best:
-            best = score
+        improved = score < best
+        best = min(best, score)
+        if not lead:
+            continue
+        if improved:
             state = {"model": net.state_dict(), "arch": asdict(arch), "epoch": epoch}
             save_atomically(state, out / "best.pt")
         save_atomically(
@@ -240,6 +276,8 @@ def train(config: LsmExperimentConfig, out: Path, log=print) -> dict[str, float]
             checkpoint,
         )
         (out / "history.json").write_text(json.dumps(history, indent=2) + "\n")
+    if world > 1:
+        dist.barrier()
     return {"best_object_mm": best, "epochs": len(history)}
 
 
@@ -253,6 +291,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     config = load_config(args.config, LsmExperimentConfig)
     result = train(config, args.out, log=lambda line: print(line, flush=True))
+    if distributed_world()[0] != 0:
+        return 0
     print(json.dumps(result))
     if args.export is not None:
         print(f"exported {export_best(config, args.out, args.export)}")

@@ -4,6 +4,8 @@ back through it, the object-wise split, checkpoints that resume, and the learnin
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -119,3 +121,40 @@ def test_bad_configs_name_the_key(dataset: Path, tmp_path: Path) -> None:
     path.write_text(path.read_text().replace("grid_size = 8", "grid_size = 7"))
     with pytest.raises(ConfigError, match="model.grid_size"):
         load_config(path, LsmExperimentConfig)
+
+
+def test_two_processes_with_ddp_train_the_weights_one_process_trains(
+    dataset: Path, tmp_path: Path
+) -> None:
+    """torchrun, gloo, 2 processes on the CPU: the same weights as one process (to rounding)."""
+    config = write_config(tmp_path / "ddp.toml", dataset, 1)
+    run = [sys.executable, "-m", "mvgrasp_training.train_lsm", str(config), "--out"]
+    subprocess.run([*run, str(tmp_path / "one")], check=True, timeout=600)
+    torchrun = [sys.executable, "-m", "torch.distributed.run", "--standalone", "--nproc_per_node",
+                "2", "-m", "mvgrasp_training.train_lsm", str(config), "--out"]  # fmt: skip
+    subprocess.run([*torchrun, str(tmp_path / "two")], check=True, timeout=600)
+    one = torch.load(tmp_path / "one" / "checkpoint.pt", weights_only=False)
+    two = torch.load(tmp_path / "two" / "checkpoint.pt", weights_only=False)
+    assert two["history"][0]["train_l1_mm"] == pytest.approx(
+        one["history"][0]["train_l1_mm"], rel=1e-4
+    )
+    # The same network: its depth of an object's views (the weights themselves differ where
+    # the gradient is only rounding, as the biases before an instance norm, which cancels
+    # them: Adam moves those by the learning rate whatever the noise's size).
+    from mvgrasp_training.lsm import LSM
+
+    config_ = load_config(config, LsmExperimentConfig)
+    arch = config_.model.architecture()
+    split = load_dataset(dataset, arch)[0][1][1]
+    inputs = (split.rgb[None, :3], split.k[None, :3], split.camera_from_world[None, :3])
+    depths = []
+    for state in (one, two):
+        net = LSM(arch)
+        net.load_state_dict(state["model"])
+        with torch.no_grad():
+            depths.append(net.eval()(*inputs))
+    torch.manual_seed(1)  # the config's seed: the initial weights of both runs
+    with torch.no_grad():
+        initial = LSM(arch).eval()(*inputs)
+    assert float((depths[0] - depths[1]).abs().max()) < 1e-4  # metres
+    assert float((depths[0] - initial).abs().max()) > 1e-3, "both runs trained"
