@@ -4,6 +4,8 @@
 
 use std::ops::Range;
 
+use rayon::prelude::*;
+
 use super::geometry::{Conv3dParams, Geometry, Kind};
 use crate::error::Result;
 use crate::gemm::{Rhs, matmul_rows};
@@ -98,11 +100,7 @@ fn image(
         let slices = start..(start + band).min(g.output[0]);
         let n = slices.len() * slice;
         let col = &mut col[..rows * n];
-        if is_same_shape(g) {
-            unfold_same_shape(g, x, col, slices);
-        } else {
-            unfold(g, x, col, slices);
-        }
+        unfold_all(g, x, col, &slices, par);
         matmul_rows(
             "conv3d",
             &mut y[start * slice..],
@@ -119,115 +117,126 @@ fn image(
 }
 
 /// Whether the convolution has stride 1 and an output the shape of its input (a "same"
-/// convolution: `k = 2 p + 1` along every axis), the case [`unfold_same_shape`] handles.
+/// convolution: `k = 2 p + 1` along every axis), the case [`unfold_row_same_shape`] handles.
 fn is_same_shape(g: &Geometry) -> bool {
     g.stride == [1; 3] && g.output == g.input
 }
 
-/// [`unfold`] for [`is_same_shape`] convolutions. Output position `p` of row
+/// The column matrix of output slices `band` (`col`: `[C * taps, positions]`), its rows made
+/// on `par`'s threads (each row on its own: the values are the same whatever the split).
+fn unfold_all(g: &Geometry, x: &[f32], col: &mut [f32], band: &Range<usize>, par: Parallelism) {
+    let positions = band.len() * g.output[1] * g.output[2];
+    let volume = g.input.iter().product::<usize>();
+    let same = is_same_shape(g);
+    let [_, k1, k2] = g.kernel;
+    let fill = |(r, row): (usize, &mut [f32])| {
+        let (c, t) = (r / g.taps(), r % g.taps());
+        let tap = [t / (k1 * k2), (t / k2) % k1, t % k2];
+        let volume = &x[c * volume..(c + 1) * volume];
+        if same {
+            unfold_row_same_shape(g, volume, row, band, tap);
+        } else {
+            unfold_row(g, volume, row, band, tap);
+        }
+    };
+    if par.threads() > 1 {
+        col.par_chunks_mut(positions).enumerate().for_each(fill);
+    } else {
+        col.chunks_mut(positions).enumerate().for_each(fill);
+    }
+}
+
+/// [`unfold_row`] for [`is_same_shape`] convolutions. Output position `p` of row
 /// `(c, kz, ky, kx)` then reads input value `p + shift` of volume `c`, with
 /// `shift = (kz - pz) h w + (ky - py) w + kx - px`: the row is the volume shifted, one copy
 /// per row of `col` instead of one per output row, after which only the slices and rows off
 /// the input and the `|kx - px|` columns of each row that the shift wraps round from a
-/// neighbouring row are zeroed. The values are those [`unfold`] writes.
-fn unfold_same_shape(g: &Geometry, x: &[f32], col: &mut [f32], band: Range<usize>) {
+/// neighbouring row are zeroed. The values are those [`unfold_row`] writes.
+fn unfold_row_same_shape(
+    g: &Geometry,
+    volume: &[f32],
+    row: &mut [f32],
+    band: &Range<usize>,
+    [kz, ky, kx]: [usize; 3],
+) {
     let [d, h, w] = g.input;
     let hw = h * w;
     let [pz, py, px] = g.padding.map(|p| p as isize);
     let base = band.start * hw;
-    let positions = band.len() * hw;
-    let mut rows = col.chunks_exact_mut(positions);
-    for volume in x.chunks_exact(d * hw).take(g.c) {
-        for kz in 0..g.kernel[0] as isize {
-            let dz = kz - pz;
-            // Output slices whose input slice oz + dz lies inside.
-            let (start, end) = (band.start as isize, band.end as isize);
-            let z_lo = (-dz).clamp(start, end);
-            let z_hi = (d as isize - dz).clamp(z_lo, end);
-            let (z_lo, z_hi) = (z_lo as usize, z_hi as usize);
-            for ky in 0..g.kernel[1] as isize {
-                let dy = ky - py;
-                for kx in 0..g.kernel[2] as isize {
-                    let dx = kx - px;
-                    let Some(row) = rows.next() else { return };
-                    let shift = dz * hw as isize + dy * w as isize + dx;
-                    let (lo, hi) = (z_lo * hw, z_hi * hw);
-                    row[..lo - base].fill(0.0);
-                    row[hi - base..].fill(0.0);
-                    if lo >= hi {
-                        continue;
-                    }
-                    // Positions whose input index falls off the volume are in wrapped rows or
-                    // columns, zeroed below.
-                    let first = lo.max((-shift).max(0) as usize);
-                    let last = hi.min(((d * hw) as isize - shift).max(0) as usize);
-                    if first < last {
-                        let from = (first as isize + shift) as usize;
-                        row[first - base..last - base]
-                            .copy_from_slice(&volume[from..from + (last - first)]);
-                    }
-                    for slice in row[lo - base..hi - base].chunks_exact_mut(hw) {
-                        // Rows oy + dy off the input, then columns ox + dx off it.
-                        let y_lo = (-dy).max(0) as usize;
-                        let y_hi = (h as isize - dy).clamp(0, h as isize) as usize;
-                        slice[..y_lo.min(h) * w].fill(0.0);
-                        slice[y_hi.max(y_lo.min(h)) * w..].fill(0.0);
-                        let x_lo = (-dx).max(0) as usize;
-                        let x_hi = (w as isize - dx).clamp(0, w as isize) as usize;
-                        for out_row in slice.chunks_exact_mut(w) {
-                            out_row[..x_lo.min(w)].fill(0.0);
-                            out_row[x_hi.max(x_lo.min(w))..].fill(0.0);
-                        }
-                    }
-                }
-            }
+    let (dz, dy, dx) = (kz as isize - pz, ky as isize - py, kx as isize - px);
+    // Output slices whose input slice oz + dz lies inside.
+    let (start, end) = (band.start as isize, band.end as isize);
+    let z_lo = (-dz).clamp(start, end);
+    let z_hi = (d as isize - dz).clamp(z_lo, end);
+    let (lo, hi) = (z_lo as usize * hw, z_hi as usize * hw);
+    row[..lo - base].fill(0.0);
+    row[hi - base..].fill(0.0);
+    if lo >= hi {
+        return;
+    }
+    // Positions whose input index falls off the volume are in wrapped rows or columns,
+    // zeroed below.
+    let shift = dz * hw as isize + dy * w as isize + dx;
+    let first = lo.max((-shift).max(0) as usize);
+    let last = hi.min(((d * hw) as isize - shift).max(0) as usize);
+    if first < last {
+        let from = (first as isize + shift) as usize;
+        row[first - base..last - base].copy_from_slice(&volume[from..from + (last - first)]);
+    }
+    let y_lo = ((-dy).max(0) as usize).min(h);
+    let y_hi = ((h as isize - dy).clamp(0, h as isize) as usize).max(y_lo);
+    let x_lo = ((-dx).max(0) as usize).min(w);
+    let x_hi = ((w as isize - dx).clamp(0, w as isize) as usize).max(x_lo);
+    for slice in row[lo - base..hi - base].chunks_exact_mut(hw) {
+        // Rows oy + dy off the input, then columns ox + dx off it.
+        slice[..y_lo * w].fill(0.0);
+        slice[y_hi * w..].fill(0.0);
+        for out_row in slice.chunks_exact_mut(w) {
+            out_row[..x_lo].fill(0.0);
+            out_row[x_hi..].fill(0.0);
         }
     }
 }
 
-/// vol2col of output slices `band`: row `(c, kz, ky, kx)` of `col` holds, for every output
+/// vol2col, one row: row `(c, kz, ky, kx)` of the column matrix holds, for every output
 /// position of the band, the input value that kernel tap meets there (zero in the padding).
-fn unfold(g: &Geometry, x: &[f32], col: &mut [f32], band: Range<usize>) {
+fn unfold_row(
+    g: &Geometry,
+    volume: &[f32],
+    row: &mut [f32],
+    band: &Range<usize>,
+    [kz, ky, kx]: [usize; 3],
+) {
     let [d, h, w] = g.input;
     let [_, oh, ow] = g.output;
     let [s0, s1, s2] = g.stride;
     let [p0, p1, p2] = g.padding;
-    let mut rows = col.chunks_exact_mut(band.len() * oh * ow);
-    for volume in x.chunks_exact(d * h * w).take(g.c) {
-        for kz in 0..g.kernel[0] {
-            for ky in 0..g.kernel[1] {
-                for kx in 0..g.kernel[2] {
-                    let Some(row) = rows.next() else { return };
-                    let (lo, hi) = valid_outputs(w, ow, s2, p2, kx);
-                    let mut out_rows = row.chunks_exact_mut(ow);
-                    for oz in band.clone() {
-                        let iz = (oz * s0 + kz).checked_sub(p0).filter(|&i| i < d);
-                        for oy in 0..oh {
-                            let Some(out_row) = out_rows.next() else {
-                                return;
-                            };
-                            let iy = (oy * s1 + ky).checked_sub(p1).filter(|&i| i < h);
-                            let (Some(iz), Some(iy)) = (iz, iy) else {
-                                out_row.fill(0.0);
-                                continue;
-                            };
-                            out_row[..lo].fill(0.0);
-                            out_row[hi..].fill(0.0);
-                            if lo == hi {
-                                continue;
-                            }
-                            let in_row = &volume[(iz * h + iy) * w..(iz * h + iy + 1) * w];
-                            let first = lo * s2 + kx - p2;
-                            if s2 == 1 {
-                                out_row[lo..hi].copy_from_slice(&in_row[first..first + (hi - lo)]);
-                            } else {
-                                let taps = in_row[first..].iter().step_by(s2);
-                                for (v, &xv) in out_row[lo..hi].iter_mut().zip(taps) {
-                                    *v = xv;
-                                }
-                            }
-                        }
-                    }
+    let (lo, hi) = valid_outputs(w, ow, s2, p2, kx);
+    let mut out_rows = row.chunks_exact_mut(ow);
+    for oz in band.clone() {
+        let iz = (oz * s0 + kz).checked_sub(p0).filter(|&i| i < d);
+        for oy in 0..oh {
+            let Some(out_row) = out_rows.next() else {
+                return;
+            };
+            let iy = (oy * s1 + ky).checked_sub(p1).filter(|&i| i < h);
+            let (Some(iz), Some(iy)) = (iz, iy) else {
+                out_row.fill(0.0);
+                continue;
+            };
+            out_row[..lo].fill(0.0);
+            out_row[hi..].fill(0.0);
+            if lo == hi {
+                continue;
+            }
+            let in_row = &volume[(iz * h + iy) * w..(iz * h + iy + 1) * w];
+            let first = lo * s2 + kx - p2;
+            if s2 == 1 {
+                out_row[lo..hi].copy_from_slice(&in_row[first..first + (hi - lo)]);
+            } else {
+                let taps = in_row[first..].iter().step_by(s2);
+                for (v, &xv) in out_row[lo..hi].iter_mut().zip(taps) {
+                    *v = xv;
                 }
             }
         }
@@ -264,8 +273,22 @@ mod tests {
                     let slices = start..(start + band).min(d);
                     let len = c * g.taps() * slices.len() * h * w;
                     let (mut fast, mut general) = (vec![f32::NAN; len], vec![f32::NAN; len]);
-                    unfold_same_shape(&g, input.data(), &mut fast, slices.clone());
-                    unfold(&g, input.data(), &mut general, slices.clone());
+                    let rows = |same: bool, col: &mut [f32]| {
+                        let n = slices.len() * h * w;
+                        for (r, row) in col.chunks_mut(n).enumerate() {
+                            let (ch, t) = (r / g.taps(), r % g.taps());
+                            let [_, k1, k2] = g.kernel;
+                            let tap = [t / (k1 * k2), (t / k2) % k1, t % k2];
+                            let volume = &input.data()[ch * d * h * w..(ch + 1) * d * h * w];
+                            if same {
+                                unfold_row_same_shape(&g, volume, row, &slices, tap);
+                            } else {
+                                unfold_row(&g, volume, row, &slices, tap);
+                            }
+                        }
+                    };
+                    rows(true, &mut fast);
+                    rows(false, &mut general);
                     assert_eq!(
                         fast, general,
                         "{c}x{d}x{h}x{w} kernel {kernel:?} {slices:?}"
