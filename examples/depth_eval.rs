@@ -5,7 +5,8 @@
 //! pixels.
 //!
 //! ```text
-//! cargo run --release --example depth_eval -- [--per-category 3] [--per-face]
+//! cargo run --release --example depth_eval -- [--per-category 3] [--per-face] [--distance-m 0.5]
+//!     [--views 3,5,9]
 //! ```
 //!
 //! Per method and N, over the top-down view and over all N views: the mean absolute error of
@@ -40,6 +41,13 @@ struct Args {
     /// Colour the objects per triangle instead of per vertex.
     #[arg(long)]
     per_face: bool,
+    /// The cameras' distance from the object, metres (the paper's test views and the LSM's
+    /// training views: 0.5; the multi-view planner's: 0.65).
+    #[arg(long, default_value_t = 0.5)]
+    distance_m: f32,
+    /// The numbers of input views (2 to 10: the top-down view and the next test views).
+    #[arg(long, value_delimiter = ',', default_values_t = [3usize, 5, 9])]
+    views: Vec<usize>,
 }
 
 /// Sums over object pixels.
@@ -102,7 +110,22 @@ fn run(args: &Args) -> Result<(), String> {
         .load()
         .map_err(|e| e.to_string())?
         .with_parallelism(Parallelism::all_threads());
-    let counts = [3usize, 5, 9];
+    let counts = &args.views;
+    if let Some(n) = counts.iter().find(|n| !(2..=10).contains(*n)) {
+        return Err(format!(
+            "--views {n}: expected 2 to 10 (both methods need two views; there are 10 test views)"
+        ));
+    }
+    if !(args.distance_m.is_finite() && args.distance_m > 0.0) {
+        return Err(format!(
+            "--distance-m {}: expected a distance in metres above 0",
+            args.distance_m
+        ));
+    }
+    let layout = HemisphereLayout {
+        radius_m: args.distance_m,
+        ..HemisphereLayout::paper_test()
+    };
     // [n][method][top-down, all views]; method 0 LSM, 1 sweep, 2 hull.
     let mut tallies = vec![[[Errors::default(); 2]; 3]; counts.len()];
     // [n][LSM, baseline]
@@ -119,7 +142,7 @@ fn run(args: &Args) -> Result<(), String> {
                 .map_err(|e| e.to_string())?
                 .center_of_mass;
             let target = pose.table_from_object.transform_point(com);
-            let cameras = HemisphereLayout::paper_test()
+            let cameras = layout
                 .cameras(intrinsics, target, u64::from(index))
                 .map_err(|e| e.to_string())?;
             let rendered = render_rgb(
@@ -157,8 +180,9 @@ fn run(args: &Args) -> Result<(), String> {
     }
     eprintln!();
     println!(
-        "{objects} objects (indices 30-{}), 10 test views 0.5 m away, colours per {}",
+        "{objects} objects (indices 30-{}), 10 test views {:.2} m away, colours per {}",
         29 + args.per_category,
+        args.distance_m,
         if args.per_face { "triangle" } else { "vertex" }
     );
     println!(
