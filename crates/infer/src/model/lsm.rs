@@ -345,24 +345,27 @@ impl Lsm {
         }
         let mut grid_features = self.refine_out.run(&up, par)?;
         grid_features.reshape(&[g, s, s, s])?;
-        // The views' rays, on the threads `par` allows (each view the same whatever the split).
-        let project = |camera: &CameraMatrices| {
-            project_rays(&grid_features, camera, &grid, a.ray_samples, hh, hw)
+        // Each view's rays and the first decoder layer over them, one view at a time (a view's
+        // rays are 7 MB; all views' at once were tens of megabytes allocated and page-faulted
+        // afresh on every call), the views shared among `par`'s threads. Each view's values are
+        // the same whatever the split (the layer's instance norm is per image).
+        let from_rays = |camera: &CameraMatrices, par: Parallelism| -> Result<Tensor> {
+            let mut rays = project_rays(&grid_features, camera, &grid, a.ray_samples, hh, hw)?;
+            rays.reshape(&[1, g * a.ray_samples, hh, hw])?;
+            self.from_rays.run(&rays, par)
         };
-        let projected: Vec<Tensor> = if par.threads() > 1 {
+        let decoded: Vec<Tensor> = if par.threads() > 1 {
             half_cameras
                 .par_iter()
-                .map(project)
+                .map(|camera| from_rays(camera, Parallelism::Sequential))
                 .collect::<Result<_>>()?
         } else {
-            half_cameras.iter().map(project).collect::<Result<_>>()?
+            half_cameras
+                .iter()
+                .map(|camera| from_rays(camera, par))
+                .collect::<Result<_>>()?
         };
-        let mut rays = Vec::with_capacity(views * g * a.ray_samples * hh * hw);
-        for r in &projected {
-            rays.extend_from_slice(r.data());
-        }
-        let rays = Tensor::new(&[views, g * a.ray_samples, hh, hw], rays)?;
-        let y = self.from_rays.run(&rays, par)?;
+        let y = concat(&decoded.iter().collect::<Vec<_>>(), 0)?;
         let y = self.decode_half.run(&concat(&[&y, &half], 1)?, par)?;
         let y = resize_bilinear(&y, h, w)?;
         let y = self.decode_full.run(&concat(&[&y, &full], 1)?, par)?;

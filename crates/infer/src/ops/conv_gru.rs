@@ -2,7 +2,10 @@
 
 use crate::error::{InferError, Result};
 use crate::ops::check::shape_error;
-use crate::ops::{Conv3dParams, concat_into, conv3d_into, conv3d_reference, sigmoid, tanh};
+use crate::ops::{
+    Conv3dParams, concat_into, conv3d_into, conv3d_reference, sigmoid, sigmoid_reference, tanh,
+    tanh_reference,
+};
 use crate::parallel::Parallelism;
 use crate::tensor::Tensor;
 
@@ -152,7 +155,7 @@ impl ConvGru3d<'_> {
         let (hidden, params) = self.check(h)?;
         let joined = crate::ops::concat(&[x, h], 1)?;
         let mut gates = conv3d_reference(&joined, self.gates_weight, self.gates_bias, params)?;
-        sigmoid(&mut gates);
+        sigmoid_reference(&mut gates);
         let [n, _, d, hh, w] = *h.shape() else {
             return Err(InferError::AxisOutOfRange {
                 op: "conv_gru3d",
@@ -176,7 +179,7 @@ impl ConvGru3d<'_> {
         let joined = crate::ops::concat(&[x, &reset_h], 1)?;
         let mut candidate =
             conv3d_reference(&joined, self.candidate_weight, self.candidate_bias, params)?;
-        tanh(&mut candidate);
+        tanh_reference(&mut candidate);
         for b in 0..n {
             for c in 0..hidden {
                 for p in 0..d * hh * w {

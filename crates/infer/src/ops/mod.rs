@@ -32,7 +32,7 @@ pub use conv3d::{
     conv3d_into, conv3d_reference,
 };
 pub use elu::elu;
-pub use gates::{sigmoid, tanh};
+pub use gates::{sigmoid, sigmoid_reference, tanh, tanh_reference};
 pub use instance_norm::{InstanceNorm, instance_norm, instance_norm_reference};
 pub use linear::{linear, linear_into, linear_reference};
 pub use local_response_norm::{

@@ -60,6 +60,8 @@ pub fn conv2d_into(
     let out_len = g.oc * g.oh * g.ow;
     let col_len = if is_pointwise(&g) {
         0
+    } else if is_tap_split(&g) {
+        tap_split_len(&g)
     } else {
         g.c * g.kh * g.kw * band_rows(&g) * g.ow
     };
@@ -99,6 +101,85 @@ pub fn conv2d_into(
 /// kernel, stride 1, no padding): then the input image already is the column matrix.
 fn is_pointwise(g: &Geometry) -> bool {
     g.kh == 1 && g.kw == 1 && g.stride == [1, 1] && g.padding == [0, 0]
+}
+
+/// Whether the convolution runs tap by tap ([`image_tap_split`]): stride 1, no dilation, a
+/// kernel wider than one value, and at least four input channels an output channel. Unfolding
+/// such an input copies every value once per tap into a matrix with few output rows (the
+/// Learnt Stereo Machine's first layer over the rays: 576 channels in, 16 out, 64 MB of
+/// columns a view, multiplied a row of 64 positions at a time); splitting by tap moves the
+/// copies to the far smaller output side instead.
+fn is_tap_split(g: &Geometry) -> bool {
+    g.stride == [1, 1] && g.dilation == [1, 1] && g.kh * g.kw > 1 && g.c >= 4 * g.oc
+}
+
+/// The scratch values of [`image_tap_split`]: the weight by tap, and every tap's products.
+fn tap_split_len(g: &Geometry) -> usize {
+    let taps = g.kh * g.kw;
+    taps * g.oc * (g.c + g.h * g.w)
+}
+
+/// One image by taps: one product `per_tap [taps * oc, h * w] = weight [taps * oc, c] ·
+/// x [c, h * w]` with the input as it lies, then each tap's products added to the outputs they
+/// reach, shifted by the tap's offset (zero padding: the positions off the input get nothing).
+/// `y` already holds the bias (or zeros); every value is the same whatever `par`.
+fn image_tap_split(
+    g: &Geometry,
+    x: &[f32],
+    weight: &[f32],
+    y: &mut [f32],
+    scratch: &mut [f32],
+    par: Parallelism,
+) -> Result<()> {
+    let taps = g.kh * g.kw;
+    let plane = g.h * g.w;
+    let (by_tap, per_tap) = scratch.split_at_mut(taps * g.oc * g.c);
+    let per_tap = &mut per_tap[..taps * g.oc * plane];
+    // weight [oc, c, taps] -> by_tap [taps, oc, c].
+    for (o, kernel) in weight.chunks_exact(g.c * taps).enumerate() {
+        for (c, values) in kernel.chunks_exact(taps).enumerate() {
+            for (t, &v) in values.iter().enumerate() {
+                by_tap[(t * g.oc + o) * g.c + c] = v;
+            }
+        }
+    }
+    let shape = [taps * g.oc, g.c, plane];
+    matmul(
+        "conv2d",
+        per_tap,
+        by_tap,
+        x,
+        shape,
+        Rhs::RowMajor,
+        false,
+        par,
+    )?;
+    let [ph, pw] = g.padding;
+    let positions = g.oh * g.ow;
+    for (t, products) in per_tap.chunks_exact(g.oc * plane).enumerate() {
+        let (ky, kx) = (t / g.kw, t % g.kw);
+        let (lo, hi) = valid_outputs(g.w, g.ow, 1, pw, kx);
+        if lo == hi {
+            continue;
+        }
+        for (out, from) in y
+            .chunks_exact_mut(positions)
+            .zip(products.chunks_exact(plane))
+        {
+            for oy in 0..g.oh {
+                let Some(iy) = (oy + ky).checked_sub(ph).filter(|&iy| iy < g.h) else {
+                    continue;
+                };
+                let ix = lo + kx - pw;
+                let src = &from[iy * g.w + ix..iy * g.w + ix + (hi - lo)];
+                let dst = &mut out[oy * g.ow + lo..oy * g.ow + hi];
+                for (d, &v) in dst.iter_mut().zip(src) {
+                    *d += v;
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The most values of a band's column matrix: 1 MiB, half a core's L2 cache on the machines
@@ -143,6 +224,12 @@ fn image(
             bias.is_some(),
             par,
         );
+    }
+    if is_tap_split(g) {
+        if bias.is_none() {
+            y.fill(0.0);
+        }
+        return image_tap_split(g, x, weight, y, col, par);
     }
     let band = band_rows(g);
     for start in (0..g.oh).step_by(band) {

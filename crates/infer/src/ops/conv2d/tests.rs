@@ -45,7 +45,9 @@ type Case = ([usize; 4], [usize; 3], [usize; 2], [usize; 2], [usize; 2]);
 #[test]
 fn im2col_matches_the_reference() {
     let mut rng = Rng::new(1);
-    let cases: [Case; 9] = [
+    // The last three run tap by tap (stride 1, no dilation, 4 or more input channels an
+    // output channel): padded as the LSM's, unpadded, and wider padding than the kernel.
+    let cases: [Case; 12] = [
         ([1, 1, 5, 5], [1, 3, 3], [1, 1], [0, 0], [1, 1]),
         ([2, 3, 8, 7], [4, 3, 3], [1, 1], [1, 1], [1, 1]),
         ([3, 2, 9, 11], [5, 3, 2], [2, 3], [1, 0], [1, 1]),
@@ -55,6 +57,9 @@ fn im2col_matches_the_reference() {
         ([4, 1, 32, 32], [8, 7, 7], [1, 1], [3, 3], [1, 1]),
         ([2, 2, 4, 4], [3, 5, 5], [3, 3], [2, 2], [1, 1]),
         ([1, 2, 3, 9], [2, 1, 4], [1, 2], [0, 3], [1, 2]),
+        ([2, 36, 7, 9], [4, 3, 3], [1, 1], [1, 1], [1, 1]),
+        ([1, 8, 6, 5], [2, 3, 2], [1, 1], [0, 0], [1, 1]),
+        ([3, 12, 4, 3], [3, 2, 3], [1, 1], [3, 2], [1, 1]),
     ];
     for (input, [oc, kh, kw], stride, padding, dilation) in cases {
         let x = rng.tensor(&input);
@@ -109,11 +114,12 @@ fn random_geometries_match_the_reference() {
 fn the_thread_count_does_not_change_a_bit() {
     let mut rng = Rng::new(3);
     // A lone image large enough for faer to split its product, one with a single output channel
-    // (faer's matrix-vector path), and a batch split by image.
+    // (faer's matrix-vector path), a batch split by image, and one run tap by tap.
     for (input, oc) in [
         ([1, 16, 48, 48], 64),
         ([1, 16, 64, 64], 1),
         ([7, 4, 16, 16], 8),
+        ([1, 128, 24, 32], 8),
     ] {
         let x = rng.tensor(&input);
         let w = rng.tensor(&[oc, input[1], 3, 3]);
@@ -158,6 +164,8 @@ fn buffers_are_reused_and_overwritten() {
         ([2, 3, 9, 9], 4, Parallelism::Rayon { threads: 2 }),
         ([1, 2, 5, 5], 2, Parallelism::Sequential),
         ([3, 3, 9, 9], 4, Parallelism::Rayon { threads: 3 }),
+        ([2, 16, 9, 9], 2, Parallelism::Rayon { threads: 2 }),
+        ([1, 3, 5, 5], 2, Parallelism::Sequential),
     ] {
         let x = rng.tensor(&input);
         let w = rng.tensor(&[oc, input[1], 3, 3]);

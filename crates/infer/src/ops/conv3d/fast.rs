@@ -191,10 +191,23 @@ fn unfold_row_same_shape(
         // Rows oy + dy off the input, then columns ox + dx off it.
         slice[..y_lo * w].fill(0.0);
         slice[y_hi * w..].fill(0.0);
-        for out_row in slice.chunks_exact_mut(w) {
-            out_row[..x_lo].fill(0.0);
-            out_row[x_hi..].fill(0.0);
+        if x_lo > 0 || x_hi < w {
+            for out_row in slice.chunks_exact_mut(w) {
+                zero_few(&mut out_row[..x_lo]);
+                zero_few(&mut out_row[x_hi..]);
+            }
         }
+    }
+}
+
+/// Zeroes `values`, usually one or none (a 3 x 3 x 3 kernel's wrapped column): a store each,
+/// not a `memset` call each (a tenth of the LSM's time went to those calls).
+#[inline(always)]
+fn zero_few(values: &mut [f32]) {
+    match values {
+        [] => {}
+        [v] => *v = 0.0,
+        _ => values.fill(0.0),
     }
 }
 
