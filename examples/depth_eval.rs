@@ -1,7 +1,7 @@
 //! Depth from RGB against the rendered depth (the seed paper's Table 1): for built-in objects
 //! the networks never saw, the paper's 10 test views (0.5 m, the first top-down) rendered in
 //! random colours with their masks; depth predicted from the first N views (3, 5, 9: the
-//! top-down view and N - 1 around it) and compared with the rendered depth over the object's
+//! top-down view and N - 1 around it; `--views 1`: the top-down view alone, the LSM only) and compared with the rendered depth over the object's
 //! pixels.
 //!
 //! ```text
@@ -111,9 +111,9 @@ fn run(args: &Args) -> Result<(), String> {
         .map_err(|e| e.to_string())?
         .with_parallelism(Parallelism::all_threads());
     let counts = &args.views;
-    if let Some(n) = counts.iter().find(|n| !(2..=10).contains(*n)) {
+    if let Some(n) = counts.iter().find(|n| !(1..=10).contains(*n)) {
         return Err(format!(
-            "--views {n}: expected 2 to 10 (both methods need two views; there are 10 test views)"
+            "--views {n}: expected 1 to 10 (there are 10 test views)"
         ));
     }
     if !(args.distance_m.is_finite() && args.distance_m > 0.0) {
@@ -160,13 +160,20 @@ fn run(args: &Args) -> Result<(), String> {
                 let started = Instant::now();
                 let learnt = lsm_depths(&lsm, &views).map_err(|e| e.to_string())?;
                 seconds[c][0] += started.elapsed().as_secs_f64();
+                // One view: the LSM alone (stereo and carving need two).
                 let started = Instant::now();
-                let depths = sweep_depths(&views, &sweep).map_err(|e| e.to_string())?;
+                let depths = if n >= 2 {
+                    sweep_depths(&views, &sweep).map_err(|e| e.to_string())?
+                } else {
+                    Vec::new()
+                };
                 seconds[c][1] += started.elapsed().as_secs_f64();
-                let predictions = learnt.iter().zip(&depths);
-                for (i, ((lsm, swept), (view, truth))) in predictions.zip(&rendered).enumerate() {
+                for (i, (lsm, (view, truth))) in learnt.iter().zip(&rendered).enumerate() {
                     let mask = view.mask.as_deref().unwrap_or(&[]);
-                    let methods = [lsm, &swept.depth_m, &swept.hull_m];
+                    let mut methods = vec![lsm];
+                    if let Some(swept) = depths.get(i) {
+                        methods.extend([&swept.depth_m, &swept.hull_m]);
+                    }
                     for (m, predicted) in methods.into_iter().enumerate() {
                         if i == 0 {
                             tallies[c][m][0].add(predicted, truth, mask);
@@ -196,6 +203,9 @@ fn run(args: &Args) -> Result<(), String> {
             "visual hull alone",
         ];
         for (m, method) in methods.iter().enumerate() {
+            if n < 2 && m > 0 {
+                continue;
+            }
             for (s, scored) in ["top-down", "all"].iter().enumerate() {
                 println!(
                     "| {method} | {n} | {scored} | {} | {:.2} |",

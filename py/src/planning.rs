@@ -311,7 +311,7 @@ fn rgb_views(
 }
 
 /// Plans a grasp on RGB views, as `plan --rgb` does: the views' depth predicted by the shipped
-/// Learnt Stereo Machine (`depth_from="lsm"`, at least 2 views) or the plane-sweep baseline
+/// Learnt Stereo Machine (`depth_from="lsm"`) or the plane-sweep baseline
 /// (`depth_from="baseline"`), then the multi-view planner. `images`: per view an `(H, W, 3)` uint8 image;
 /// `ks`, `world_from_cameras`: their cameras, posed in the table frame (z up, the table at
 /// z = 0); `masks`: per view the object's pixels or `None`. Returns `grasps.json`'s content
@@ -348,7 +348,7 @@ pub(crate) fn plan_rgb<'py>(
 /// Stereo Machine; `"baseline"`: silhouette carving and a plane sweep, `mvgrasp::stereo`), as
 /// `plan --rgb` predicts it: a `(V, H, W)`
 /// float32 array, metres along each optical axis, 0 where unknown. The inputs are
-/// `plan_rgb`'s.
+/// `plan_rgb`'s; the LSM also takes a single view (the baseline needs two).
 #[pyfunction]
 #[pyo3(signature = (images, ks, world_from_cameras, *, masks = None, depth_from = "lsm"))]
 pub(crate) fn predict_depth<'py>(

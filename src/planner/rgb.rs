@@ -14,7 +14,7 @@ use std::time::Instant;
 use mvgrasp_infer::{Lsm, Parallelism};
 use mvgrasp_planner::{DepthImage, GqcnnPolicy, Mask, View, models};
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::lsm::lsm_depths;
 use crate::planner::sensor::{mismatch, read_cameras_json, render_conventions};
 use crate::planner::{SensorPlanParams, ViewsPlanReport, plan_on_views};
@@ -228,6 +228,15 @@ pub fn plan_on_rgb_views(
     params: &SensorPlanParams,
     predictor: &DepthPredictor,
 ) -> Result<RgbPlanReport> {
+    if rgb.len() < 2 {
+        return Err(Error::Stereo {
+            problem: format!(
+                "planning on RGB views needs at least 2 views, got {} (one predicted view leaves \
+                 the object's far side unseen)",
+                rgb.len()
+            ),
+        });
+    }
     let started = Instant::now();
     let views = predict_views(rgb, predictor)?;
     let depth_s = started.elapsed().as_secs_f64();

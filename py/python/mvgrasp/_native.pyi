@@ -491,4 +491,4 @@ def predict_depth(
 ) -> npt.NDArray[np.float32]:
     """Each RGB view's depth predicted from all of them as ``plan --rgb`` predicts it (``"lsm"``
     or ``"baseline"``): (V, H, W)
-    float32 metres, 0 where unknown. The inputs are ``plan_rgb``'s."""
+    float32 metres, 0 where unknown. The inputs are ``plan_rgb``'s; the LSM also takes one view."""

@@ -286,6 +286,23 @@ impl Lsm {
     /// place the grid (fewer than two, parallel axes, not finite).
     pub fn predict(&self, images: &Tensor, cameras: &[CameraMatrices]) -> Result<Tensor> {
         let a = self.description.architecture;
+        let grid = VoxelGrid::centred_on(cameras, a.grid_side_m, a.grid_size)?;
+        self.predict_in(images, cameras, grid.centre)
+    }
+
+    /// [`Lsm::predict`] with the grid centred on `centre` (world frame) instead of where the
+    /// cameras' axes meet: what one view needs, whose axis alone does not place the grid.
+    ///
+    /// # Errors
+    /// As [`Lsm::predict`], and [`InferError::InvalidParameter`] for no camera or a centre that
+    /// is not finite.
+    pub fn predict_in(
+        &self,
+        images: &Tensor,
+        cameras: &[CameraMatrices],
+        centre: [f32; 3],
+    ) -> Result<Tensor> {
+        let a = self.description.architecture;
         let (h, w) = (a.image_height, a.image_width);
         let views = cameras.len();
         if images.shape() != [views, 3, h, w] {
@@ -309,7 +326,19 @@ impl Lsm {
             .iter()
             .map(|c| scale_intrinsics(c, hw as f32 / w as f32, hh as f32 / h as f32))
             .collect();
-        let grid = VoxelGrid::centred_on(cameras, a.grid_side_m, a.grid_size)?;
+        if views == 0 {
+            return Err(InferError::InvalidParameter {
+                op: "lsm",
+                name: "cameras",
+                value: "0 cameras".into(),
+                expected: "at least one view",
+            });
+        }
+        let grid = VoxelGrid {
+            centre,
+            side_m: a.grid_side_m,
+            size: a.grid_size,
+        };
         let s = a.grid_size;
         let g = a.gru_channels;
         let f = a.features;
