@@ -268,17 +268,23 @@ pub(crate) fn plan_mesh<'py>(
 }
 
 /// The RGB views of `plan_rgb` and `predict_depth`: per view an `(H, W, 3)` uint8 image, its
-/// 3x3 camera matrix, its pose and optionally its mask; at least two views.
+/// 3x3 camera matrix, its pose and optionally its mask; at least `min_views` views (planning
+/// asks for two, the LSM's prediction takes one).
 fn rgb_views(
     images: &[PyReadonlyArray3<'_, u8>],
     ks: &[PyReadonlyArray2<'_, f64>],
     world_from_cameras: &[PyReadonlyArray2<'_, f64>],
     masks: Option<&Vec<Option<PyReadonlyArray2<'_, bool>>>>,
+    min_views: usize,
 ) -> PyResult<Vec<RgbView>> {
     let n = images.len();
     let mut lengths = vec![n, ks.len(), world_from_cameras.len()];
     lengths.extend(masks.map(Vec::len));
-    one_per_view("images, ks, world_from_cameras (and masks)", &lengths, 2)?;
+    one_per_view(
+        "images, ks, world_from_cameras (and masks)",
+        &lengths,
+        min_views,
+    )?;
     let mut views = Vec::with_capacity(n);
     for i in 0..n {
         let image = images[i].as_array();
@@ -333,7 +339,7 @@ pub(crate) fn plan_rgb<'py>(
     as_json: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let predictor = predictor_of(depth_from)?;
-    let views = rgb_views(&images, &ks, &world_from_cameras, masks.as_ref())?;
+    let views = rgb_views(&images, &ks, &world_from_cameras, masks.as_ref(), 2)?;
     let options = options(true, cem, hand_check, seed);
     let net = network(model, &options)?;
     let file = py.detach(|| -> mvgrasp::Result<GraspsFile> {
@@ -360,7 +366,7 @@ pub(crate) fn predict_depth<'py>(
     depth_from: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
     let predictor = predictor_of(depth_from)?;
-    let views = rgb_views(&images, &ks, &world_from_cameras, masks.as_ref())?;
+    let views = rgb_views(&images, &ks, &world_from_cameras, masks.as_ref(), 1)?;
     let (w, h) = (
         views[0].camera.intrinsics.width as usize,
         views[0].camera.intrinsics.height as usize,

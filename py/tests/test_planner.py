@@ -168,6 +168,13 @@ def test_planning_on_rgb_views_writes_the_cli_grasps_json_byte_for_byte(tmp_path
                                    [c.world_from_camera for c in cameras[:5]], masks=masks[:5])  # fmt: skip
     assert learnt.shape == depth.shape and (learnt[0][masks[0]] > 0).all()
     assert np.median(np.abs(learnt[0][masks[0]] - truth[masks[0]])) < 0.02
+    # One view: the LSM alone (its grid centred on the camera's axis); the baseline needs two.
+    one = mvgrasp.predict_depth(images[:1], [cameras[0].k], [cameras[0].world_from_camera],
+                                masks=masks[:1])  # fmt: skip
+    assert one.shape == (1, *depth.shape[1:]) and (one[0][masks[0]] > 0).all()
+    with pytest.raises(ValueError, match="at least 2"):
+        mvgrasp.predict_depth(images[:1], [cameras[0].k], [cameras[0].world_from_camera],
+                              depth_from="baseline")  # fmt: skip
     with pytest.raises(ValueError, match="depth_from"):
         mvgrasp.Planner().plan_rgb(images, cameras, depth_from="stereo")
     with pytest.raises(ValueError, match="at least 2 views"):

@@ -224,11 +224,17 @@ class LSM(nn.Module):
         self.decode_full = nn.Sequential(conv2d(f + half, half), nn.Conv2d(half, 1, 3, padding=1))
 
     def forward(
-        self, images: torch.Tensor, k: torch.Tensor, camera_from_world: torch.Tensor
+        self,
+        images: torch.Tensor,
+        k: torch.Tensor,
+        camera_from_world: torch.Tensor,
+        centre: torch.Tensor | None = None,
     ) -> torch.Tensor:
         """``images`` (B, V, 3, H, W) in [0, 1] at the architecture's size, ``k`` (B, V, 3, 3) at
         that size, ``camera_from_world`` (B, V, 4, 4) in the table frame: depth (B, V, H, W),
-        metres along each camera's optical axis."""
+        metres along each camera's optical axis. ``centre`` (B, 3): the grid's centre instead of
+        where the cameras' axes meet (one view's axis does not place it; the Rust runtime's
+        ``Lsm::predict_in``)."""
         arch = self.arch
         b, views, _, h, w = images.shape
         flat = images.reshape(b * views, 3, h, w)
@@ -236,7 +242,8 @@ class LSM(nn.Module):
         half = self.encode_half(full)
         hh, hw = half.shape[-2:]
         k_half = scale_intrinsics(k, hw / w, hh / h)
-        centre = grid_centre(camera_from_world)
+        if centre is None:
+            centre = grid_centre(camera_from_world)
         voxels = voxel_centres(centre, arch.grid_size, arch.grid_side_m)
         half_views = half.reshape(b, views, *half.shape[1:])
         state = torch.zeros(

@@ -116,6 +116,12 @@ def test_the_network_gives_a_depth_per_view_in_range_and_learns() -> None:
     images = torch.rand(1, 3, 3, 24, 32)
     depth = net(images, k, camera_from_world)
     assert depth.shape == (1, 3, 24, 32)
+    # A grid centre given is used as given: the cameras' own gives the same depth, another not.
+    with torch.no_grad():
+        centre = grid_centre(camera_from_world)
+        assert torch.equal(net(images, k, camera_from_world, centre=centre), depth.detach())
+        moved = net(images, k, camera_from_world, centre=centre + 0.05)
+        assert not torch.allclose(moved, depth.detach())
     radius = arch.grid_side_m * math.sqrt(3) / 2
     assert (depth > 0.5 - radius - 1e-3).all() and (depth < 0.5 + radius + 1e-3).all()
     target = torch.full_like(depth, 0.45)

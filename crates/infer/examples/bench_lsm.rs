@@ -6,10 +6,11 @@
 //! cargo run --release -p mvgrasp-infer --example bench_lsm -- MODEL.json INPUTS.safetensors \
 //!     [--threads 1] [--seconds 2]
 //!
-//! INPUTS holds `images` `[V, 3, H, W]` at the network's size, `k` `[V, 3, 3]` at that size and
-//! `camera_from_world` `[V, 4, 4]`. A warm-up of 2 calls, then calls until `--seconds` have
-//! passed and at least 5 were made; reports the median call and the predicted depth's mean
-//! (a check that both runtimes predicted alike).
+//! INPUTS holds `images` `[V, 3, H, W]` at the network's size, `k` `[V, 3, 3]` at that size,
+//! `camera_from_world` `[V, 4, 4]` and optionally `centre` `[3]`, the grid's centre
+//! (`Lsm::predict_in`; one view's axis does not place the grid). A warm-up of 2 calls, then
+//! calls until `--seconds` have passed and at least 5 were made; reports the median call and
+//! the predicted depth's mean (a check that both runtimes predicted alike).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -59,6 +60,18 @@ fn run(args: Args) -> Result<(), String> {
     let mut inputs = Weights::load(&args.inputs).map_err(|e| e.to_string())?;
     let mut take = |name: &str| inputs.take_any(name).map_err(|e| e.to_string());
     let (images, k, pose) = (take("images")?, take("k")?, take("camera_from_world")?);
+    // An optional grid centre (one view's: its axis alone does not place the grid).
+    let centre = match inputs.take_any("centre") {
+        Ok(c) if c.shape() == [3] => Some([c.data()[0], c.data()[1], c.data()[2]]),
+        Ok(c) => {
+            return Err(format!(
+                "{}: centre {:?}, expected [3]",
+                args.inputs.display(),
+                c.shape()
+            ));
+        }
+        Err(_) => None,
+    };
     let views = images.shape()[0];
     if k.shape() != [views, 3, 3] || pose.shape() != [views, 4, 4] {
         return Err(format!(
@@ -80,15 +93,19 @@ fn run(args: Args) -> Result<(), String> {
         .num_threads(args.threads)
         .build()
         .map_err(|e| e.to_string())?;
+    let predict = || match centre {
+        Some(c) => net.predict_in(&images, &cameras, c),
+        None => net.predict(&images, &cameras),
+    };
     let (times, depth) = pool.install(|| -> Result<_, String> {
         // Two warm-up calls.
-        net.predict(&images, &cameras).map_err(|e| e.to_string())?;
-        let mut depth = net.predict(&images, &cameras).map_err(|e| e.to_string())?;
+        predict().map_err(|e| e.to_string())?;
+        let mut depth = predict().map_err(|e| e.to_string())?;
         let mut times = Vec::new();
         let started = Instant::now();
         while times.len() < 5 || started.elapsed().as_secs_f64() < args.seconds {
             let t = Instant::now();
-            depth = net.predict(&images, &cameras).map_err(|e| e.to_string())?;
+            depth = predict().map_err(|e| e.to_string())?;
             times.push(t.elapsed().as_secs_f64());
         }
         Ok((times, depth))
