@@ -172,7 +172,7 @@ def test_planning_on_rgb_views_writes_the_cli_grasps_json_byte_for_byte(tmp_path
     one = mvgrasp.predict_depth(images[:1], [cameras[0].k], [cameras[0].world_from_camera],
                                 masks=masks[:1])  # fmt: skip
     assert one.shape == (1, *depth.shape[1:]) and (one[0][masks[0]] > 0).all()
-    with pytest.raises(ValueError, match="at least 2"):
+    with pytest.raises(mvgrasp.PlanningError, match="stereo needs at least 2"):
         mvgrasp.predict_depth(images[:1], [cameras[0].k], [cameras[0].world_from_camera],
                               depth_from="baseline")  # fmt: skip
     with pytest.raises(ValueError, match="depth_from"):
