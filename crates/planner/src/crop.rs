@@ -112,13 +112,7 @@ pub fn crop_depth(
     if size == 0 {
         return Vec::new();
     }
-    let per_side = (params.window_px as f32 / params.size_px as f32)
-        .round()
-        .max(1.0) as usize;
-    // Where a pixel's samples sit within it, crop pixels from its centre.
-    let offsets: Vec<f32> = (0..per_side)
-        .map(|k| (k as f32 + 0.5) / per_side as f32 - 0.5)
-        .collect();
+    let offsets = sample_offsets(params);
     // The rotation's products, once per sample column and per sample row instead of once per
     // sample: the values `CropFrame::image_point` forms, added in its order, so the crop is
     // the same to the bit (tested against the sample-by-sample form).
@@ -132,31 +126,50 @@ pub fn crop_depth(
         .map(|dy| [frame.sin * dy, frame.cos * dy])
         .collect();
     let mut out = Vec::with_capacity(size * size);
-    for row in rows.chunks_exact(per_side) {
-        for column in columns.chunks_exact(per_side) {
-            let mut sum = 0.0f64;
-            let mut count = 0u32;
-            for &[sin_dy, cos_dy] in row {
-                for &[cos_dx, sin_dx] in column {
-                    let uv = [
+    for row in rows.chunks_exact(offsets.len()) {
+        for column in columns.chunks_exact(offsets.len()) {
+            let points = row.iter().flat_map(|&[sin_dy, cos_dy]| {
+                column.iter().map(move |&[cos_dx, sin_dx]| {
+                    [
                         frame.center[0] + cos_dx - sin_dy,
                         frame.center[1] + sin_dx + cos_dy,
-                    ];
-                    let value = sample(depth, uv);
-                    if value > 0.0 {
-                        sum += f64::from(value);
-                        count += 1;
-                    }
-                }
-            }
-            out.push(if count == 0 {
-                0.0
-            } else {
-                (sum / f64::from(count)) as f32
+                    ]
+                })
             });
+            out.push(mean_of_samples(depth, points));
         }
     }
     out
+}
+
+/// Where a crop pixel's `round(W/S)^2` samples sit within it along each axis, in crop pixels
+/// from its centre.
+fn sample_offsets(params: &CropParams) -> Vec<f32> {
+    let per_side = (params.window_px as f32 / params.size_px as f32)
+        .round()
+        .max(1.0) as usize;
+    (0..per_side)
+        .map(|k| (k as f32 + 0.5) / per_side as f32 - 0.5)
+        .collect()
+}
+
+/// The mean of the non-empty [`sample`]s at `points` (summed in their order), 0 when all are
+/// empty: one crop pixel.
+fn mean_of_samples(depth: &DepthImage, points: impl Iterator<Item = [f32; 2]>) -> f32 {
+    let mut sum = 0.0f64;
+    let mut count = 0u32;
+    for uv in points {
+        let value = sample(depth, uv);
+        if value > 0.0 {
+            sum += f64::from(value);
+            count += 1;
+        }
+    }
+    if count == 0 {
+        0.0
+    } else {
+        (sum / f64::from(count)) as f32
+    }
 }
 
 /// Bilinear sample at `uv`; the nearest pixel when a neighbour is empty; 0 outside the image.
@@ -310,31 +323,16 @@ mod tests {
     ) -> Vec<f32> {
         let frame = CropFrame::new(center_px, angle_rad, params);
         let size = params.size_px as usize;
-        let per_side = (params.window_px as f32 / params.size_px as f32)
-            .round()
-            .max(1.0) as usize;
-        let offsets: Vec<f32> = (0..per_side)
-            .map(|k| (k as f32 + 0.5) / per_side as f32 - 0.5)
-            .collect();
+        let offsets = sample_offsets(params);
         let mut out = Vec::new();
         for i in 0..size {
             for j in 0..size {
-                let (mut sum, mut count) = (0.0f64, 0u32);
-                for &dy in &offsets {
-                    for &dx in &offsets {
-                        let uv = frame.image_point([j as f32 + dx, i as f32 + dy]);
-                        let value = sample(depth, uv);
-                        if value > 0.0 {
-                            sum += f64::from(value);
-                            count += 1;
-                        }
-                    }
-                }
-                out.push(if count == 0 {
-                    0.0
-                } else {
-                    (sum / f64::from(count)) as f32
+                let points = offsets.iter().flat_map(|&dy| {
+                    offsets
+                        .iter()
+                        .map(move |&dx| frame.image_point([j as f32 + dx, i as f32 + dy]))
                 });
+                out.push(mean_of_samples(depth, points));
             }
         }
         out
