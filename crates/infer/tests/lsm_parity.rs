@@ -64,6 +64,11 @@ fn the_tiny_lsm_matches_torch() {
         // Metres: within 10 micrometres of torch's float64 depth.
         let worst = assert_near(&depth, &want, 1e-5, "depth");
         assert!(worst > 0.0 || depth == want);
+        // The grid centred by hand where the cameras place it: the same depth to the bit.
+        let a = net.architecture();
+        let grid = VoxelGrid::centred_on(&cameras, a.grid_side_m, a.grid_size).unwrap();
+        let given = net.predict_in(&images, &cameras, grid.centre).unwrap();
+        assert_eq!(given, depth);
     }
 }
 
@@ -84,6 +89,23 @@ fn the_lsm_refuses_what_it_cannot_use() {
     let one = Tensor::new(&[1, 3, 24, 32], images.data()[..3 * 24 * 32].to_vec()).unwrap();
     let err = net.predict(&one, &cameras[..1]).unwrap_err().to_string();
     assert!(err.contains("at least two cameras"), "{err}");
+    // One view places no grid; given a centre it predicts, given none or a bad one it refuses.
+    let alone = net
+        .predict_in(&one, &cameras[..1], [0.0, 0.0, 0.03])
+        .unwrap();
+    assert_eq!(alone.shape(), [1, 24, 32]);
+    assert!(alone.data().iter().all(|d| d.is_finite() && *d > 0.0));
+    let none = Tensor::new(&[0, 3, 24, 32], Vec::new()).unwrap();
+    let err = net
+        .predict_in(&none, &[], [0.0; 3])
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("at least one view"), "{err}");
+    let err = net
+        .predict_in(&one, &cameras[..1], [f32::NAN, 0.0, 0.0])
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("finite centre"), "{err}");
 
     let dir = tempfile::tempdir().unwrap();
     for ext in ["json", "safetensors"] {

@@ -312,6 +312,14 @@ impl Lsm {
                 images.shape(),
             ));
         }
+        if views == 0 {
+            return Err(InferError::InvalidParameter {
+                op: "lsm",
+                name: "cameras",
+                value: "0 cameras".into(),
+                expected: "at least one view",
+            });
+        }
         let par = self.parallelism;
         let mut full = images.clone();
         for block in &self.encode_full {
@@ -326,14 +334,6 @@ impl Lsm {
             .iter()
             .map(|c| scale_intrinsics(c, hw as f32 / w as f32, hh as f32 / h as f32))
             .collect();
-        if views == 0 {
-            return Err(InferError::InvalidParameter {
-                op: "lsm",
-                name: "cameras",
-                value: "0 cameras".into(),
-                expected: "at least one view",
-            });
-        }
         let grid = VoxelGrid {
             centre,
             side_m: a.grid_side_m,
