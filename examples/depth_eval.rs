@@ -1,8 +1,8 @@
 //! Depth from RGB against the rendered depth (the seed paper's Table 1): for built-in objects
 //! the networks never saw, the paper's 10 test views (0.5 m, the first top-down) rendered in
 //! random colours with their masks; depth predicted from the first N views (3, 5, 9: the
-//! top-down view and N - 1 around it; `--views 1`: the top-down view alone, the LSM only) and compared with the rendered depth over the object's
-//! pixels.
+//! top-down view and N - 1 around it; `--views 1`: the top-down view alone, the LSM only) and
+//! compared with the rendered depth over the object's pixels.
 //!
 //! ```text
 //! cargo run --release --example depth_eval -- [--per-category 3] [--per-face] [--distance-m 0.5]
@@ -45,7 +45,8 @@ struct Args {
     /// training views: 0.5; the multi-view planner's: 0.65).
     #[arg(long, default_value_t = 0.5)]
     distance_m: f32,
-    /// The numbers of input views (2 to 10: the top-down view and the next test views).
+    /// The numbers of input views (1 to 10: the top-down view and the next test views; with one
+    /// view only the LSM, stereo and carving need two).
     #[arg(long, value_delimiter = ',', default_values_t = [3usize, 5, 9])]
     views: Vec<usize>,
 }

@@ -201,7 +201,7 @@ fn unfold_row_same_shape(
 }
 
 /// Zeroes `values`, usually one or none (a 3 x 3 x 3 kernel's wrapped column): a store each,
-/// not a `memset` call each (a tenth of the LSM's time went to those calls).
+/// not a `memset` call each (`memset` fell from 4.3% to 2.3% of the LSM's profile).
 #[inline(always)]
 fn zero_few(values: &mut [f32]) {
     match values {
