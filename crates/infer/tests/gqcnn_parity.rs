@@ -60,6 +60,53 @@ fn wrong_inputs_are_shape_errors() {
     assert!(err.to_string().contains("pose"), "{err}");
 }
 
+#[test]
+fn grasps_that_share_a_crop_score_as_if_each_had_its_own() {
+    let (depth, pose, _) = io("gqcnn_tiny_pose2");
+    let net = Gqcnn::load(&fixtures().join("gqcnn_tiny_pose2.json")).unwrap();
+    let mut workspace = GqcnnWorkspace::default();
+    // Crop i's grasps at three poses each, as the sampler tries an axis at three depths.
+    let crops = depth.shape()[0];
+    let side = depth.shape()[2];
+    let pixels = side * side;
+    let image_of: Vec<usize> = (0..crops).flat_map(|i| [i; 3]).collect();
+    let pose_rows: Vec<f32> = image_of
+        .iter()
+        .enumerate()
+        .flat_map(|(k, &i)| {
+            let row = &pose.data()[2 * i..2 * i + 2];
+            [row[0] + 0.01 * (k % 3) as f32, row[1]]
+        })
+        .collect();
+    let shared_pose = Tensor::new(&[image_of.len(), 2], pose_rows).unwrap();
+    let repeated: Vec<f32> = image_of
+        .iter()
+        .flat_map(|&i| depth.data()[i * pixels..(i + 1) * pixels].to_vec())
+        .collect();
+    let repeated = Tensor::new(&[image_of.len(), 1, side, side], repeated).unwrap();
+    let each = net
+        .predict(&repeated, &shared_pose, &mut workspace)
+        .unwrap();
+    let shared = net
+        .predict_shared(&depth, &image_of, &shared_pose, &mut workspace)
+        .unwrap();
+    assert_eq!(
+        shared.iter().map(|p| p.to_bits()).collect::<Vec<_>>(),
+        each.iter().map(|p| p.to_bits()).collect::<Vec<_>>()
+    );
+    // A crop index past the crops, or one index too few, is refused.
+    let mut bad = image_of.clone();
+    bad[4] = crops;
+    let err = net
+        .predict_shared(&depth, &bad, &shared_pose, &mut workspace)
+        .unwrap_err();
+    assert!(err.to_string().contains("crop index"), "{err}");
+    let err = net
+        .predict_shared(&depth, &image_of[1..], &shared_pose, &mut workspace)
+        .unwrap_err();
+    assert!(err.to_string().contains("pose"), "{err}");
+}
+
 fn copy_fixture(dir: &Path, name: &str) -> PathBuf {
     for ext in ["json", "safetensors"] {
         std::fs::copy(

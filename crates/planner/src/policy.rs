@@ -383,12 +383,21 @@ impl GqcnnPolicy {
         let mut workspace = GqcnnWorkspace::default();
         let mut quality = Vec::with_capacity(grasps.len());
         for chunk in grasps.chunks(self.batch.max(1)) {
-            let mut crops = Vec::with_capacity(chunk.len() * side * side);
+            // A crop shows the image around the grasp axis, whatever the grasp's depth: one crop
+            // (and one pass of the image stream) for each run of grasps on the same axis.
+            let mut axes: Vec<&ImageGrasp> = Vec::with_capacity(chunk.len());
+            let mut image_of = Vec::with_capacity(chunk.len());
+            for g in chunk {
+                if !axes.last().is_some_and(|a| same_axis(a, g)) {
+                    axes.push(g);
+                }
+                image_of.push(axes.len() - 1);
+            }
+            let mut crops = Vec::with_capacity(axes.len() * side * side);
             let mut poses = Vec::with_capacity(chunk.len() * pose_inputs);
             // The crops in parallel (in order: the same bytes whatever the thread count).
             crops.par_extend(
-                chunk
-                    .par_iter()
+                axes.par_iter()
                     .flat_map_iter(|g| crop_depth(&view.depth, g.center_px, g.angle_rad, &crop)),
             );
             for g in chunk {
@@ -397,12 +406,21 @@ impl GqcnnPolicy {
                     poses.push(theta);
                 }
             }
-            let depth = Tensor::new(&[chunk.len(), 1, side, side], crops)?;
+            let depth = Tensor::new(&[axes.len(), 1, side, side], crops)?;
             let pose = Tensor::new(&[chunk.len(), pose_inputs], poses)?;
-            quality.extend(self.net.predict(&depth, &pose, &mut workspace)?);
+            quality.extend(
+                self.net
+                    .predict_shared(&depth, &image_of, &pose, &mut workspace)?,
+            );
         }
         Ok(quality)
     }
+}
+
+/// Whether two grasps share a crop: the same centre and in-image angle, to the bit.
+fn same_axis(a: &ImageGrasp, b: &ImageGrasp) -> bool {
+    a.center_px.map(f32::to_bits) == b.center_px.map(f32::to_bits)
+        && a.angle_rad.to_bits() == b.angle_rad.to_bits()
 }
 
 #[cfg(test)]
@@ -410,6 +428,37 @@ mod tests {
     use super::*;
     use crate::models::GQCNN_TOPDOWN;
     use crate::test_scenes::box_view;
+
+    #[test]
+    fn an_axis_tried_at_several_depths_is_cropped_once_and_scored_as_if_alone() {
+        let policy = GqcnnPolicy::new(GQCNN_TOPDOWN.load().unwrap(), 0.08).unwrap();
+        let view = box_view(false);
+        let grasps = sample_image_grasps(&view.depth, None, 0.08, &policy.sampler, 3);
+        assert!(
+            grasps.len() >= 30 && grasps.len() % 3 == 0,
+            "{}",
+            grasps.len()
+        );
+        assert!(grasps.chunks(3).all(|t| same_axis(&t[0], &t[2])));
+        let crop = policy.contract.crop_for(&view.camera.intrinsics).unwrap();
+        let side = crop.size_px as usize;
+        let crops: Vec<f32> = grasps
+            .iter()
+            .flat_map(|g| crop_depth(&view.depth, g.center_px, g.angle_rad, &crop))
+            .collect();
+        let depth = Tensor::new(&[grasps.len(), 1, side, side], crops).unwrap();
+        let poses = grasps.iter().map(|g| g.depth_m).collect();
+        let pose = Tensor::new(&[grasps.len(), 1], poses).unwrap();
+        let alone = policy
+            .net
+            .predict(&depth, &pose, &mut GqcnnWorkspace::default())
+            .unwrap();
+        let shared = policy.score(&view, &grasps).unwrap();
+        assert_eq!(
+            shared.iter().map(|q| q.to_bits()).collect::<Vec<_>>(),
+            alone.iter().map(|q| q.to_bits()).collect::<Vec<_>>()
+        );
+    }
 
     #[test]
     fn the_cross_entropy_method_adds_its_rounds_and_is_deterministic() {

@@ -44,6 +44,7 @@ pub struct GqcnnWorkspace {
     a: Tensor,
     stream: Vec<StreamBuffers>,
     image: Tensor,
+    gathered: Tensor,
     pose_in: Tensor,
     pose: Tensor,
     merged: Tensor,
@@ -208,21 +209,46 @@ impl Gqcnn {
         pose: &Tensor,
         workspace: &'w mut GqcnnWorkspace,
     ) -> Result<&'w Tensor> {
+        self.logits_shared(depth, None, pose, workspace)
+    }
+
+    /// [`Gqcnn::logits`] for grasps that share crops: grasp `i` (pose row `i`) sees crop
+    /// `image_of[i]` of `depth` `[M, 1, S, S]`; each crop goes through the image stream once
+    /// (a grasp axis tried at several depths has one crop). `None`: grasp `i` sees crop `i`.
+    ///
+    /// # Errors
+    /// As [`Gqcnn::logits`], and [`InferError::ShapeMismatch`] for an `image_of` whose length is
+    /// not the pose rows' or that names a crop past `M`.
+    pub fn logits_shared<'w>(
+        &self,
+        depth: &Tensor,
+        image_of: Option<&[usize]>,
+        pose: &Tensor,
+        workspace: &'w mut GqcnnWorkspace,
+    ) -> Result<&'w Tensor> {
         let arch = self.architecture();
         let s = arch.image_size_px;
-        let n = depth.shape().first().copied().unwrap_or(0);
-        if depth.shape() != [n, 1, s, s] {
+        let m = depth.shape().first().copied().unwrap_or(0);
+        if depth.shape() != [m, 1, s, s] {
             return Err(InferError::ShapeMismatch {
                 op: "gqcnn depth",
                 expected: format!("[batch, 1, {s}, {s}]"),
                 got: depth.shape().to_vec(),
             });
         }
+        let n = image_of.map_or(m, <[usize]>::len);
         if pose.shape() != [n, arch.pose_inputs] {
             return Err(InferError::ShapeMismatch {
                 op: "gqcnn pose",
                 expected: format!("[{n}, {}]", arch.pose_inputs),
                 got: pose.shape().to_vec(),
+            });
+        }
+        if let Some(bad) = image_of.and_then(|of| of.iter().find(|&&i| i >= m)) {
+            return Err(InferError::ShapeMismatch {
+                op: "gqcnn crop index",
+                expected: format!("indices below {m} crops"),
+                got: vec![*bad],
             });
         }
         let par = self.parallelism;
@@ -242,6 +268,20 @@ impl Gqcnn {
             par,
         )?;
         relu(&mut w.image);
+        if let Some(image_of) = image_of {
+            let features = w.image.shape().get(1).copied().unwrap_or(0);
+            w.gathered.resize(&[n, features]);
+            let from = w.image.data();
+            for (row, &i) in w
+                .gathered
+                .data_mut()
+                .chunks_exact_mut(features.max(1))
+                .zip(image_of)
+            {
+                row.copy_from_slice(&from[i * features..(i + 1) * features]);
+            }
+            std::mem::swap(&mut w.image, &mut w.gathered);
+        }
         w.pose_in.resize(pose.shape());
         let p = arch.pose_inputs;
         for (i, (x, &v)) in w.pose_in.data_mut().iter_mut().zip(pose.data()).enumerate() {
@@ -285,14 +325,34 @@ impl Gqcnn {
         workspace: &mut GqcnnWorkspace,
     ) -> Result<Vec<f32>> {
         self.logits(depth, pose, workspace)?;
-        softmax(&mut workspace.logits)?;
-        Ok(workspace
-            .logits
-            .data()
-            .chunks_exact(2)
-            .map(|p| p[1])
-            .collect())
+        robust_probability(workspace)
     }
+
+    /// [`Gqcnn::predict`] for grasps that share crops (see [`Gqcnn::logits_shared`]).
+    ///
+    /// # Errors
+    /// As [`Gqcnn::logits_shared`].
+    pub fn predict_shared(
+        &self,
+        depth: &Tensor,
+        image_of: &[usize],
+        pose: &Tensor,
+        workspace: &mut GqcnnWorkspace,
+    ) -> Result<Vec<f32>> {
+        self.logits_shared(depth, Some(image_of), pose, workspace)?;
+        robust_probability(workspace)
+    }
+}
+
+/// The softmax's second class of the logits in `workspace`: P(robust) per grasp.
+fn robust_probability(workspace: &mut GqcnnWorkspace) -> Result<Vec<f32>> {
+    softmax(&mut workspace.logits)?;
+    Ok(workspace
+        .logits
+        .data()
+        .chunks_exact(2)
+        .map(|p| p[1])
+        .collect())
 }
 
 /// `NAME.weight` `[outputs, inputs]` and `NAME.bias` `[outputs]`.
