@@ -435,7 +435,7 @@ mod tests {
         let view = box_view(false);
         let grasps = sample_image_grasps(&view.depth, None, 0.08, &policy.sampler, 3);
         assert!(
-            grasps.len() >= 30 && grasps.len() % 3 == 0,
+            grasps.len() >= 30 && grasps.len().is_multiple_of(3),
             "{}",
             grasps.len()
         );
