@@ -10,7 +10,7 @@
 //! and re-scoring the best 10 of each view on virtual views with the top-down GQ-CNN.
 //!
 //! ```text
-//! cargo run --release --example bench_plan -- [--data ../shared/data] [--runs 15]
+//! cargo run --release --example bench_plan -- [--data ../shared/data] [--runs 15] [--fused-only]
 //! ```
 //!
 //! No peer runs beside it: gqcnn (TensorFlow 1) does not install here. Its published figures
@@ -39,6 +39,9 @@ struct Args {
     /// Timed runs per setting (the median is reported).
     #[arg(long, default_value_t = 15)]
     runs: usize,
+    /// Only the multi-view planner's table (no shared data needed).
+    #[arg(long)]
+    fused_only: bool,
 }
 
 fn main() -> ExitCode {
@@ -116,6 +119,9 @@ fn plan_once(
 }
 
 fn run(args: &Args) -> Result<(), String> {
+    if args.fused_only {
+        return bench_fused(args);
+    }
     let root = args.data.join("real_depth/gqcnn/data");
     let images = root.join("examples/single_object/primesense");
     if !images.is_dir() {

@@ -5,7 +5,7 @@
 //! ([`Fusion`]), the hand must also stay out of space that no view has seen, and above the
 //! table.
 
-use mvgrasp_geometry::{Pose3, Vec3};
+use mvgrasp_geometry::{Mat3, Pose3, Vec3};
 use mvgrasp_grasp::{Gripper, HandShapes};
 use serde::Serialize;
 
@@ -217,14 +217,22 @@ fn box_meets_view(
     let (u0, u1) = (clamp_u(lo[0].floor()), clamp_u(hi[0].ceil()));
     let (v0, v1) = (clamp_v(lo[1].floor()), clamp_v(hi[1].ceil()));
     let box_from_camera = gripper_from_box.inverse() * gripper_from_camera;
+    // Pixel (u, v) at depth d is the camera point d * (a_u, b_v, 1): in the box's frame,
+    // d * (a_u * R_x + b_v * R_y + R_z) + t, with the rotation's columns formed once.
+    let r = Mat3::from_quat(box_from_camera.rotation);
+    let t = box_from_camera.translation;
+    let columns: Vec<Vec3> = (u0..=u1)
+        .map(|u| r.x_axis * ((u as f32 - k.cx) / k.fx))
+        .collect();
+    let width = k.width as usize;
+    let data = view.depth.as_slice();
     (v0..=v1).any(|v| {
-        (u0..=u1).any(|u| {
-            let d = view.depth.at(u, v);
-            if d <= 0.0 {
-                return false;
-            }
-            let p = box_from_camera.transform_point(k.unproject(u as f32, v as f32, d));
-            p.x.abs() < half.x && p.y.abs() < half.y && p.z.abs() < half.z
+        let row_direction = r.y_axis * ((v as f32 - k.cy) / k.fy) + r.z_axis;
+        let start = v as usize * width;
+        let row = &data[start + u0 as usize..=start + u1 as usize];
+        row.iter().zip(&columns).any(|(&d, &column)| {
+            let p = (column + row_direction) * d + t;
+            d > 0.0 && p.x.abs() < half.x && p.y.abs() < half.y && p.z.abs() < half.z
         })
     })
 }

@@ -112,12 +112,9 @@ pub fn virtual_crop(
         if q.z <= 1e-3 {
             return None;
         }
-        let (j, i) = (
-            (focal * q.x / q.z + half).round(),
-            (focal * q.y / q.z + half).round(),
-        );
-        (j >= 0.0 && i >= 0.0 && j < size as f32 && i < size as f32)
-            .then(|| i as usize * size + j as usize)
+        let j = rounded_index(focal * q.x / q.z + half, size)?;
+        let i = rounded_index(focal * q.y / q.z + half, size)?;
+        Some(i * size + j)
     };
     let camera_points: Vec<(usize, f32)> = fusion
         .points()
@@ -191,6 +188,21 @@ pub fn virtual_crop(
         }
     }
     depth
+}
+
+/// `x.round()` as an index below `size`, or `None` where it falls outside `0..size` (or `x`
+/// is not a number), without a call: `roundf` is a libm call on baseline x86-64, two a point
+/// per virtual crop, and they were a third of its time.
+#[inline]
+fn rounded_index(x: f32, size: usize) -> Option<usize> {
+    // round(x) >= 0 exactly when x > -0.5, and round(x) < size when x < size - 0.5.
+    if !(x > -0.5 && x < size as f32 - 0.5) {
+        return None;
+    }
+    // Truncation, then up where the (exactly computed) fraction is a half or more; on
+    // (-0.5, 0) it truncates to 0, as round does.
+    let t = x as i32;
+    Some((t + i32::from(x - t as f32 >= 0.5)) as usize)
 }
 
 /// A network that re-scores candidates on virtual views of the fused scene.
@@ -397,6 +409,43 @@ mod tests {
     use crate::fusion::FusionParams;
     use crate::test_scenes::box_view;
     use mvgrasp_grasp::ImageGrasp;
+
+    #[test]
+    fn rounded_index_is_round_to_the_bit() {
+        let reference = |x: f32, size: usize| {
+            let r = x.round();
+            (r >= 0.0 && r < size as f32).then_some(r as usize)
+        };
+        let mut values = vec![
+            -0.5f32,
+            -0.499_999_97,
+            -0.0,
+            0.0,
+            0.499_999_97,
+            0.5,
+            1.5,
+            2.5,
+            31.499_998,
+            31.5,
+            32.0,
+            -1.0,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            1e30,
+            -1e30,
+        ];
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        values.extend((0..200_000).map(|_| rng.random_range(-3.0f32..35.0)));
+        // Exact halves and their neighbours.
+        for k in -4..70 {
+            let half = k as f32 * 0.5;
+            values.extend([half, half.next_down(), half.next_up()]);
+        }
+        for x in values {
+            assert_eq!(rounded_index(x, 32), reference(x, 32), "{x}");
+        }
+    }
 
     #[test]
     fn a_virtual_top_down_view_draws_the_crop_the_camera_saw() {
