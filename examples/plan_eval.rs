@@ -129,6 +129,11 @@ struct Args {
     /// The RGB policies colour the objects per triangle instead of per vertex.
     #[arg(long)]
     rgb_per_face: bool,
+    /// Try every re-scored candidate of the fused policies in physics and write one JSON line
+    /// per candidate to this file (object, policy, rank, scores, tilt, outcome): the data for
+    /// choosing how candidates are ranked, on the development set.
+    #[arg(long)]
+    dump_rescored: Option<PathBuf>,
 }
 
 /// A policy of the evaluation: its label, network, views, their distance, and whether the
@@ -362,6 +367,15 @@ fn run(args: &Args) -> Result<(), String> {
         prepared.push((params, gripper, policy));
     }
     let mut tallies: Vec<Tally> = policies.iter().map(|_| Tally::default()).collect();
+    let mut dump = args
+        .dump_rescored
+        .as_ref()
+        .map(|path| {
+            std::fs::File::create(path)
+                .map(std::io::BufWriter::new)
+                .map_err(|e| format!("{}: {e}", path.display()))
+        })
+        .transpose()?;
     println!(
         "object                         policy                 quality  free  robust  physics"
     );
@@ -435,6 +449,9 @@ fn run(args: &Args) -> Result<(), String> {
             } else {
                 String::new()
             };
+            if let Some(out) = dump.as_mut() {
+                dump_rescored(out, name, label, mesh, &report, gripper, params)?;
+            }
             // The approach's angle from straight down.
             let tilt_deg = (-best.grasp.approach().z)
                 .clamp(-1.0, 1.0)
@@ -540,4 +557,59 @@ fn print_table2(policies: &[Policy], tallies: &[Tally]) {
         }
         println!();
     }
+}
+
+/// Every re-scored candidate of `report` (none unless the policy re-scores) tried in physics,
+/// one JSON line each.
+fn dump_rescored(
+    out: &mut impl std::io::Write,
+    name: &str,
+    label: &str,
+    mesh: &TriangleMesh,
+    report: &mvgrasp::planner::PlanReport,
+    gripper: &mvgrasp::grasp::Gripper,
+    params: &PlanParams,
+) -> Result<(), String> {
+    let rescored: Vec<_> = report
+        .candidates
+        .iter()
+        .take_while(|c| c.view_quality.is_some())
+        .copied()
+        .collect();
+    if rescored.is_empty() {
+        return Ok(());
+    }
+    let object = GraspObject::new(mesh.clone()).map_err(|e| e.to_string())?;
+    let labels = check_grasps(
+        &object,
+        &report.table_from_object,
+        &rescored,
+        gripper,
+        params,
+    )
+    .map_err(|e| e.to_string())?;
+    for (rank, (c, l)) in rescored.iter().zip(&labels).enumerate() {
+        let tilt_deg = (-c.grasp.approach().z)
+            .clamp(-1.0, 1.0)
+            .acos()
+            .to_degrees();
+        let line = serde_json::json!({
+            "object": name,
+            "policy": label,
+            "rank": rank,
+            "quality": c.quality,
+            "view_quality": c.view_quality,
+            "view": c.view,
+            "theta_rad": c.theta_rad,
+            "by_scorer": c.by_scorer,
+            "tilt_deg": tilt_deg,
+            "width_m": c.grasp.width_m,
+            "z_m": c.grasp.world_from_gripper.translation.z,
+            "robust": l.robust,
+            "held": l.physics.map(|p| p.success),
+            "failed_at": l.physics.and_then(|p| p.failed_at).map(|f| format!("{f:?}")),
+        });
+        writeln!(out, "{line}").map_err(|e| e.to_string())?;
+    }
+    Ok(())
 }

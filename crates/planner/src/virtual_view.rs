@@ -9,7 +9,7 @@
 //! (sampling gaps), else the table plane where its ray meets it, else the farthest depth in the
 //! crop.
 
-use mvgrasp_geometry::{Pose3, Vec3};
+use mvgrasp_geometry::{Mat3, Pose3, Vec3};
 use mvgrasp_grasp::Grasp;
 use mvgrasp_infer::{Gqcnn, GqcnnWorkspace, Tensor};
 use rand::{RngExt, SeedableRng};
@@ -116,11 +116,14 @@ pub fn virtual_crop(
         let i = rounded_index(focal * q.y / q.z + half, size)?;
         Some(i * size + j)
     };
+    // The rotation as a matrix, formed once: three products a coordinate per point.
+    let r = Mat3::from_quat(camera_from_world.rotation);
+    let t = camera_from_world.translation;
     let camera_points: Vec<(usize, f32)> = fusion
         .points()
         .iter()
         .filter_map(|&p| {
-            let q = camera_from_world.transform_point(p);
+            let q = r * p + t;
             pixel_of(q).map(|i| (i, q.z))
         })
         .collect();
