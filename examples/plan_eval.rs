@@ -239,6 +239,8 @@ struct Tally {
     /// Trials whose object stayed in its pose until the gripper came.
     tried: usize,
     held: usize,
+    /// Objects it found no grasp for (counted as not held in the per-object rate).
+    unplanned: usize,
     seconds: f64,
     /// With --top10: per object, the share of its top choices (up to 10) that held.
     top10: Vec<f64>,
@@ -399,6 +401,7 @@ fn run(args: &Args) -> Result<(), String> {
             tally.seconds += report.timings.plan_s;
             let Some(best) = report.best else {
                 println!("{name:<30} {label:<22} no candidate");
+                tally.unplanned += 1;
                 continue;
             };
             tally.planned += 1;
@@ -450,7 +453,7 @@ fn run(args: &Args) -> Result<(), String> {
                 String::new()
             };
             if let Some(out) = dump.as_mut() {
-                dump_rescored(out, name, label, mesh, &report, gripper, params)?;
+                dump_rescored(out, name, label, mesh, &report, gripper, params, &renderer)?;
             }
             // The approach's angle from straight down.
             let tilt_deg = (-best.grasp.approach().z)
@@ -470,7 +473,7 @@ fn run(args: &Args) -> Result<(), String> {
     }
     println!("\n{} objects", objects.len());
     println!(
-        "policy                 planned  collision-free  robust label  held in physics (of trials)  95% interval  plan time/object"
+        "policy                 planned  collision-free  robust label  held in physics (of trials)  95% interval  held (of objects)  plan time/object"
     );
     let pct = |k: usize, n: usize| 100.0 * k as f64 / n.max(1) as f64;
     let interval = |k: usize, n: usize| {
@@ -479,7 +482,7 @@ fn run(args: &Args) -> Result<(), String> {
     };
     for (Policy { label, .. }, t) in policies.iter().zip(&tallies) {
         println!(
-            "{label:<22} {:>7}  {:>13.0}%  {:>11.0}%  {:>9.0}% ({:>2} of {:>2})  {:>12}  {:>14.2} s",
+            "{label:<22} {:>7}  {:>13.0}%  {:>11.0}%  {:>9.0}% ({:>2} of {:>2})  {:>12}  {:>6.0}% ({:>2} of {:>2})  {:>14.2} s",
             t.planned,
             pct(t.free, t.planned),
             pct(t.robust, t.planned),
@@ -487,9 +490,16 @@ fn run(args: &Args) -> Result<(), String> {
             t.held,
             t.tried,
             interval(t.held, t.tried),
+            pct(t.held, t.tried + t.unplanned),
+            t.held,
+            t.tried + t.unplanned,
             t.seconds / objects.len().max(1) as f64
         );
     }
+    println!(
+        "(of trials: toppled trials and objects without a plan apart; of objects: an object \
+         without a plan counts as not held, toppled trials still apart)"
+    );
     println!("\nheld in physics per category (of trials)");
     for (Policy { label, .. }, t) in policies.iter().zip(&tallies) {
         println!("{label}");
@@ -569,6 +579,7 @@ fn dump_rescored(
     report: &mvgrasp::planner::PlanReport,
     gripper: &mvgrasp::grasp::Gripper,
     params: &PlanParams,
+    renderer: &Renderer,
 ) -> Result<(), String> {
     let rescored: Vec<_> = report
         .candidates
@@ -580,6 +591,51 @@ fn dump_rescored(
         return Ok(());
     }
     let object = GraspObject::new(mesh.clone()).map_err(|e| e.to_string())?;
+    // The same trial on the object as the fused views reconstruct it (what the planner could
+    // try itself).
+    let started = std::time::Instant::now();
+    let scene = mvgrasp::planner::render_scene(renderer, &object, params).map_err(|e| e.to_string())?;
+    let fusion = params
+        .fusion
+        .as_ref()
+        .and_then(|f| mvgrasp::planner::Fusion::build(&scene.views, f));
+    let recon = fusion
+        .as_ref()
+        .and_then(|f| f.solid_mesh())
+        .and_then(|m| GraspObject::new(m).ok())
+        .and_then(|o| {
+            mvgrasp::grasp::physics::PhysicsObject::from_grasp_object(
+                &o,
+                &params.labels.physics_shape,
+            )
+            .ok()
+        });
+    let built_s = started.elapsed().as_secs_f64();
+    let started = std::time::Instant::now();
+    let recon_trials: Vec<Option<mvgrasp::grasp::physics::PhysicsOutcome>> = {
+        use rayon::prelude::*;
+        rescored
+            .par_iter()
+            .map(|c| {
+                recon.as_ref().and_then(|body| {
+                    mvgrasp::grasp::physics::simulate_grasp(
+                        body,
+                        &mvgrasp::geometry::Pose3::IDENTITY,
+                        &c.grasp,
+                        gripper,
+                        &params.labels.physics,
+                    )
+                    .ok()
+                })
+            })
+            .collect()
+    };
+    eprintln!(
+        "{name}: reconstruction {:.2} s, {} trials {:.2} s",
+        built_s,
+        rescored.len(),
+        started.elapsed().as_secs_f64()
+    );
     let labels = check_grasps(
         &object,
         &report.table_from_object,
@@ -588,7 +644,7 @@ fn dump_rescored(
         params,
     )
     .map_err(|e| e.to_string())?;
-    for (rank, (c, l)) in rescored.iter().zip(&labels).enumerate() {
+    for (rank, ((c, l), r)) in rescored.iter().zip(&labels).zip(&recon_trials).enumerate() {
         let tilt_deg = (-c.grasp.approach().z)
             .clamp(-1.0, 1.0)
             .acos()
@@ -608,6 +664,8 @@ fn dump_rescored(
             "robust": l.robust,
             "held": l.physics.map(|p| p.success),
             "failed_at": l.physics.and_then(|p| p.failed_at).map(|f| format!("{f:?}")),
+            "recon_held": r.map(|p| p.success),
+            "recon_failed_at": r.and_then(|p| p.failed_at).map(|f| format!("{f:?}")),
         });
         writeln!(out, "{line}").map_err(|e| e.to_string())?;
     }

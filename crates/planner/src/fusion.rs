@@ -228,6 +228,17 @@ impl Fusion {
         self.table_z_m
     }
 
+    /// Centre of cell (0, 0, 0), world; cell `(x, y, z)` is centred `voxel_m` times that
+    /// further, and stored at `(z * ny + y) * nx + x`.
+    pub fn origin(&self) -> Vec3 {
+        self.origin
+    }
+
+    /// What the views say about cell `index` (in the grid's order, see [`Fusion::origin`]).
+    pub(crate) fn cell(&self, index: usize) -> Occupancy {
+        self.cells[index]
+    }
+
     /// Whether the hand check lets the hand into unknown space ([`FusionParams::allow_unknown`]).
     pub fn allows_unknown(&self) -> bool {
         self.allow_unknown

@@ -9,6 +9,7 @@ pub mod fusion;
 pub mod hand_check;
 pub mod models;
 pub mod policy;
+pub mod reconstruct;
 pub mod sampler;
 pub mod seed;
 pub mod table;
