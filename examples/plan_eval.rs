@@ -594,7 +594,8 @@ fn dump_rescored(
     // The same trial on the object as the fused views reconstruct it (what the planner could
     // try itself).
     let started = std::time::Instant::now();
-    let scene = mvgrasp::planner::render_scene(renderer, &object, params).map_err(|e| e.to_string())?;
+    let scene =
+        mvgrasp::planner::render_scene(renderer, &object, params).map_err(|e| e.to_string())?;
     let fusion = params
         .fusion
         .as_ref()
@@ -645,10 +646,7 @@ fn dump_rescored(
     )
     .map_err(|e| e.to_string())?;
     for (rank, ((c, l), r)) in rescored.iter().zip(&labels).zip(&recon_trials).enumerate() {
-        let tilt_deg = (-c.grasp.approach().z)
-            .clamp(-1.0, 1.0)
-            .acos()
-            .to_degrees();
+        let tilt_deg = (-c.grasp.approach().z).clamp(-1.0, 1.0).acos().to_degrees();
         let line = serde_json::json!({
             "object": name,
             "policy": label,

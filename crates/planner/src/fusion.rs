@@ -81,6 +81,19 @@ impl Default for FusionParams {
     }
 }
 
+/// Edge of the cubes the kept points are grouped in, metres.
+pub const POINT_BUCKET_M: f32 = 0.01;
+
+/// A run of [`Fusion::points`] that lies in one cube of [`POINT_BUCKET_M`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointBucket {
+    /// The cube's centre, world: every point of the run lies within half the cube's diagonal
+    /// of it.
+    pub centre: Vec3,
+    /// The run, as indices into [`Fusion::points`].
+    pub range: std::ops::Range<usize>,
+}
+
 /// The fused model: a grid of cells over the object and its surroundings, and the observed
 /// points near the object.
 #[derive(Clone, Debug)]
@@ -91,8 +104,11 @@ pub struct Fusion {
     dims: [usize; 3],
     cells: Vec<Occupancy>,
     table_z_m: f32,
-    /// Observed points (world) within `points_margin_m` of the object.
+    /// Observed points (world) within `points_margin_m` of the object, grouped by bucket.
     points: Vec<Vec3>,
+    /// The points' buckets: cubes of [`POINT_BUCKET_M`], each its centre and its run of
+    /// `points`, so that a virtual view draws only the buckets its frustum can reach.
+    buckets: Vec<PointBucket>,
     /// Per cell count: free, unknown, occupied.
     counts: [usize; 3],
     allow_unknown: bool,
@@ -159,6 +175,7 @@ impl Fusion {
             cells: vec![Occupancy::Unknown; dims.iter().product()],
             table_z_m: table_z,
             points: Vec::new(),
+            buckets: Vec::new(),
             counts: [0; 3],
             allow_unknown: params.allow_unknown,
         };
@@ -206,7 +223,8 @@ impl Fusion {
                 }
             }
         }
-        fusion.points = sums.into_iter().map(|(s, n)| s / n as f32).collect();
+        let points: Vec<Vec3> = sums.into_iter().map(|(s, n)| s / n as f32).collect();
+        (fusion.points, fusion.buckets) = bucketed(points, keep_lo);
         for cell in &fusion.cells {
             fusion.counts[*cell as usize] += 1;
         }
@@ -249,9 +267,14 @@ impl Fusion {
         self.counts
     }
 
-    /// The observed points near the object, world frame.
+    /// The observed points near the object, world frame, grouped by [`Fusion::buckets`].
     pub fn points(&self) -> &[Vec3] {
         &self.points
+    }
+
+    /// The points' buckets, in the order of [`Fusion::points`].
+    pub fn buckets(&self) -> &[PointBucket] {
+        &self.buckets
     }
 
     /// The cell holding `p`, if the grid covers it.
@@ -340,6 +363,28 @@ impl Fusion {
         .into_iter()
         .find_map(|(n, kind)| (n > 0).then_some(kind))
     }
+}
+
+/// `points` grouped by cubes of [`POINT_BUCKET_M`] from `lo` (a stable sort: each cube's
+/// points keep their order), and the cubes' runs.
+fn bucketed(points: Vec<Vec3>, lo: Vec3) -> (Vec<Vec3>, Vec<PointBucket>) {
+    let cube = |p: Vec3| {
+        let c = ((p - lo) / POINT_BUCKET_M).floor().max(Vec3::ZERO);
+        [c.z as u32, c.y as u32, c.x as u32]
+    };
+    let mut keyed: Vec<([u32; 3], Vec3)> = points.into_iter().map(|p| (cube(p), p)).collect();
+    keyed.sort_by_key(|&(key, _)| key);
+    let mut buckets: Vec<PointBucket> = Vec::new();
+    for (i, &([z, y, x], _)) in keyed.iter().enumerate() {
+        match buckets.last_mut() {
+            Some(b) if i > 0 && keyed[i - 1].0 == [z, y, x] => b.range.end = i + 1,
+            _ => buckets.push(PointBucket {
+                centre: lo + (Vec3::new(x as f32, y as f32, z as f32) + 0.5) * POINT_BUCKET_M,
+                range: i..i + 1,
+            }),
+        }
+    }
+    (keyed.into_iter().map(|(_, p)| p).collect(), buckets)
 }
 
 /// The world bounds of the box of half extents `half` at `world_from_box`.

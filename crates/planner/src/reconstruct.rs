@@ -138,7 +138,10 @@ mod tests {
         }
         let volume = mesh.mass_facts(1000.0).unwrap().volume_m3;
         let expected = 0.04 * 0.12 * (0.05 - 0.5 * voxel);
-        assert!((volume / expected - 1.0).abs() < 0.15, "{volume} vs {expected}");
+        assert!(
+            (volume / expected - 1.0).abs() < 0.15,
+            "{volume} vs {expected}"
+        );
         assert!(mesh.is_watertight());
     }
 }

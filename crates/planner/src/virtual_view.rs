@@ -21,7 +21,7 @@ use crate::contract::InputContract;
 use crate::crop::CropParams;
 use crate::depth_image::View;
 use crate::error::{PlannerError, Result};
-use crate::fusion::Fusion;
+use crate::fusion::{Fusion, POINT_BUCKET_M};
 use crate::policy::{GqcnnPolicy, Plan, ScoredGrasp};
 use crate::seed::splitmix;
 
@@ -101,6 +101,28 @@ pub fn virtual_crop(
     distance_m: f32,
     front_tolerance_m: f32,
 ) -> Vec<f32> {
+    draw_crop(
+        fusion,
+        grasp,
+        crop,
+        focal_px,
+        distance_m,
+        front_tolerance_m,
+        true,
+    )
+}
+
+/// [`virtual_crop`], drawing only the buckets that can reach the frustum when `cull` (else
+/// every point: the reference the culled crop is tested against).
+fn draw_crop(
+    fusion: &Fusion,
+    grasp: &Grasp,
+    crop: &CropParams,
+    focal_px: f32,
+    distance_m: f32,
+    front_tolerance_m: f32,
+    cull: bool,
+) -> Vec<f32> {
     let size = crop.size_px as usize;
     let half = size as f32 / 2.0;
     // Crop pixels are window/size image pixels.
@@ -119,14 +141,25 @@ pub fn virtual_crop(
     // The rotation as a matrix, formed once: three products a coordinate per point.
     let r = Mat3::from_quat(camera_from_world.rotation);
     let t = camera_from_world.translation;
-    let camera_points: Vec<(usize, f32)> = fusion
-        .points()
-        .iter()
-        .filter_map(|&p| {
+    // Only the buckets whose cube can reach the crop's frustum (|x|, |y| < k z, z > 0): the
+    // crop sees a few centimetres around the grasp of the fused points' 20 or so. A cube is
+    // skipped when its bounding sphere (grown by a millimetre against rounding) lies wholly
+    // beyond one of the frustum's planes; the points drawn, and so the crop, are the same.
+    let k = (half + 0.5) / focal;
+    let reach = (0.5 * 3f32.sqrt() * POINT_BUCKET_M + 1e-3) * (1.0 + k * k).sqrt();
+    let points = fusion.points();
+    let mut camera_points: Vec<(usize, f32)> = Vec::new();
+    for bucket in fusion.buckets() {
+        let c = r * bucket.centre + t;
+        let beyond = c.z < -reach || c.x.abs() - k * c.z > reach || c.y.abs() - k * c.z > reach;
+        if cull && beyond {
+            continue;
+        }
+        camera_points.extend(points[bucket.range.clone()].iter().filter_map(|&p| {
             let q = r * p + t;
             pixel_of(q).map(|i| (i, q.z))
-        })
-        .collect();
+        }));
+    }
     let mut nearest = vec![f32::INFINITY; size * size];
     for &(i, z) in &camera_points {
         nearest[i] = nearest[i].min(z);
@@ -410,8 +443,58 @@ mod tests {
     use super::*;
     use crate::crop::crop_depth;
     use crate::fusion::FusionParams;
-    use crate::test_scenes::box_view;
+    use crate::test_scenes::{box_view, seen_box};
     use mvgrasp_grasp::ImageGrasp;
+
+    #[test]
+    fn culled_virtual_crops_are_the_whole_cloud_s_to_the_bit() {
+        // Two oblique views of a cube and the top-down view of a box, fused; grasps all
+        // around, near and far, tilted every way: the crop drawn from the buckets that reach
+        // its frustum is the crop drawn from every point.
+        let views = [seen_box(-1.0), seen_box(1.0)];
+        let fusion = Fusion::build(&views, &FusionParams::default()).unwrap();
+        let top = box_view(false);
+        let top_fusion =
+            Fusion::build(std::slice::from_ref(&top), &FusionParams::default()).unwrap();
+        let crop = CropParams::default();
+        let focal = views[0].depth.intrinsics().fx;
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        let mut culled_any = false;
+        for fusion in [&fusion, &top_fusion] {
+            assert!(fusion.buckets().len() > 10, "{}", fusion.buckets().len());
+            for _ in 0..200 {
+                let centre = Vec3::new(
+                    rng.random_range(-0.1..0.1),
+                    rng.random_range(-0.1..0.1),
+                    rng.random_range(0.0..0.08),
+                );
+                let turn = mvgrasp_geometry::Rot3::from_scaled_axis(Vec3::new(
+                    std::f32::consts::PI + rng.random_range(-1.2..1.2),
+                    rng.random_range(-1.2..1.2),
+                    rng.random_range(-3.0..3.0),
+                ));
+                let grasp = Grasp {
+                    world_from_gripper: Pose3::from_parts(centre, turn),
+                    width_m: 0.04,
+                };
+                let distance = rng.random_range(0.3..0.8);
+                let culled = draw_crop(fusion, &grasp, &crop, focal, distance, 0.003, true);
+                let all = draw_crop(fusion, &grasp, &crop, focal, distance, 0.003, false);
+                assert_eq!(
+                    culled.iter().map(|d| d.to_bits()).collect::<Vec<_>>(),
+                    all.iter().map(|d| d.to_bits()).collect::<Vec<_>>(),
+                    "{grasp:?} at {distance} m"
+                );
+                culled_any |= fusion.buckets().iter().any(|b| {
+                    let camera = (grasp.world_from_gripper
+                        * Pose3::from_translation(Vec3::new(0.0, 0.0, -distance)))
+                    .inverse();
+                    camera.transform_point(b.centre).x.abs() > 0.2
+                });
+            }
+        }
+        assert!(culled_any);
+    }
 
     #[test]
     fn rounded_index_is_round_to_the_bit() {
