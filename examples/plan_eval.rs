@@ -134,6 +134,10 @@ struct Args {
     /// choosing how candidates are ranked, on the development set.
     #[arg(long)]
     dump_rescored: Option<PathBuf>,
+    /// With --dump-rescored: also try each candidate on the object as the fused views
+    /// reconstruct it ([`mvgrasp::planner::Fusion::solid_mesh`]).
+    #[arg(long)]
+    dump_recon: bool,
 }
 
 /// A policy of the evaluation: its label, network, views, their distance, and whether the
@@ -453,7 +457,8 @@ fn run(args: &Args) -> Result<(), String> {
                 String::new()
             };
             if let Some(out) = dump.as_mut() {
-                dump_rescored(out, name, label, mesh, &report, gripper, params, &renderer)?;
+                let renderer = args.dump_recon.then_some(&renderer);
+                dump_rescored(out, name, label, mesh, &report, gripper, params, renderer)?;
             }
             // The approach's angle from straight down.
             let tilt_deg = (-best.grasp.approach().z)
@@ -579,7 +584,7 @@ fn dump_rescored(
     report: &mvgrasp::planner::PlanReport,
     gripper: &mvgrasp::grasp::Gripper,
     params: &PlanParams,
-    renderer: &Renderer,
+    renderer: Option<&Renderer>,
 ) -> Result<(), String> {
     let rescored: Vec<_> = report
         .candidates
@@ -591,52 +596,12 @@ fn dump_rescored(
         return Ok(());
     }
     let object = GraspObject::new(mesh.clone()).map_err(|e| e.to_string())?;
-    // The same trial on the object as the fused views reconstruct it (what the planner could
-    // try itself).
-    let started = std::time::Instant::now();
-    let scene =
-        mvgrasp::planner::render_scene(renderer, &object, params).map_err(|e| e.to_string())?;
-    let fusion = params
-        .fusion
-        .as_ref()
-        .and_then(|f| mvgrasp::planner::Fusion::build(&scene.views, f));
-    let recon = fusion
-        .as_ref()
-        .and_then(|f| f.solid_mesh())
-        .and_then(|m| GraspObject::new(m).ok())
-        .and_then(|o| {
-            mvgrasp::grasp::physics::PhysicsObject::from_grasp_object(
-                &o,
-                &params.labels.physics_shape,
-            )
-            .ok()
-        });
-    let built_s = started.elapsed().as_secs_f64();
-    let started = std::time::Instant::now();
-    let recon_trials: Vec<Option<mvgrasp::grasp::physics::PhysicsOutcome>> = {
-        use rayon::prelude::*;
-        rescored
-            .par_iter()
-            .map(|c| {
-                recon.as_ref().and_then(|body| {
-                    mvgrasp::grasp::physics::simulate_grasp(
-                        body,
-                        &mvgrasp::geometry::Pose3::IDENTITY,
-                        &c.grasp,
-                        gripper,
-                        &params.labels.physics,
-                    )
-                    .ok()
-                })
-            })
-            .collect()
+    // With a renderer: the same trial on the object as the fused views reconstruct it (what
+    // the planner could try itself).
+    let recon_trials = match renderer {
+        Some(renderer) => reconstruction_trials(renderer, &object, &rescored, gripper, params)?,
+        None => vec![None; rescored.len()],
     };
-    eprintln!(
-        "{name}: reconstruction {:.2} s, {} trials {:.2} s",
-        built_s,
-        rescored.len(),
-        started.elapsed().as_secs_f64()
-    );
     let labels = check_grasps(
         &object,
         &report.table_from_object,
@@ -668,4 +633,41 @@ fn dump_rescored(
         writeln!(out, "{line}").map_err(|e| e.to_string())?;
     }
     Ok(())
+}
+
+/// Each of `candidates` tried in physics on `object` as its fused views reconstruct it (`None`
+/// where no reconstruction could be made or the trial failed to run).
+fn reconstruction_trials(
+    renderer: &Renderer,
+    object: &GraspObject,
+    candidates: &[mvgrasp::planner::ScoredGrasp],
+    gripper: &mvgrasp::grasp::Gripper,
+    params: &PlanParams,
+) -> Result<Vec<Option<mvgrasp::grasp::physics::PhysicsOutcome>>, String> {
+    use mvgrasp::grasp::physics::{PhysicsObject, simulate_grasp};
+    use rayon::prelude::*;
+    let scene =
+        mvgrasp::planner::render_scene(renderer, object, params).map_err(|e| e.to_string())?;
+    let body = params
+        .fusion
+        .as_ref()
+        .and_then(|f| mvgrasp::planner::Fusion::build(&scene.views, f))
+        .and_then(|f| f.solid_mesh())
+        .and_then(|m| GraspObject::new(m).ok())
+        .and_then(|o| PhysicsObject::from_grasp_object(&o, &params.labels.physics_shape).ok());
+    Ok(candidates
+        .par_iter()
+        .map(|c| {
+            body.as_ref().and_then(|body| {
+                simulate_grasp(
+                    body,
+                    &mvgrasp::geometry::Pose3::IDENTITY,
+                    &c.grasp,
+                    gripper,
+                    &params.labels.physics,
+                )
+                .ok()
+            })
+        })
+        .collect())
 }

@@ -179,7 +179,11 @@ impl Fusion {
             counts: [0; 3],
             allow_unknown: params.allow_unknown,
         };
-        // Space carving, a z-slice of cells per task.
+        // Space carving, a z-slice of cells per task; each view's pose inverted once.
+        let carvers: Vec<(Pose3, &View)> = views
+            .iter()
+            .map(|view| (view.camera.camera_from_world(), view))
+            .collect();
         let plane = dims[0] * dims[1];
         let origin = fusion.origin;
         fusion
@@ -190,7 +194,12 @@ impl Fusion {
                 for (i, cell) in slice.iter_mut().enumerate() {
                     let centre = origin
                         + Vec3::new((i % dims[0]) as f32, (i / dims[0]) as f32, z as f32) * voxel;
-                    if views.iter().any(|view| sees_through(view, centre, band)) {
+                    if carvers
+                        .iter()
+                        .any(|(camera_from_world, view)| {
+                            sees_through(view, camera_from_world, centre, band)
+                        })
+                    {
                         *cell = Occupancy::Free;
                     }
                 }
@@ -404,19 +413,68 @@ fn world_bounds(world_from_box: &Pose3, half: Vec3) -> Bounds {
 }
 
 /// Whether `view` sees through the point `p` (world) to a surface more than `band` behind it.
-fn sees_through(view: &View, p: Vec3, band: f32) -> bool {
-    let q = view.camera.camera_from_world().transform_point(p);
+fn sees_through(view: &View, camera_from_world: &Pose3, p: Vec3, band: f32) -> bool {
+    let q = camera_from_world.transform_point(p);
     let Some([u, v]) = view.depth.intrinsics().project(q) else {
         return false;
     };
-    let d = view.depth.at(u.round() as i64, v.round() as i64);
+    let d = view.depth.at(round(u), round(v));
     d > 0.0 && q.z < d - band
+}
+
+/// `x.round() as i64` without a call (`roundf` is a libm call on baseline x86-64, two per cell
+/// and view here): truncation, then away from zero where the (exactly computed) fraction is a
+/// half or more. Values of 2^23 or more (and NaN, as `as` takes it: 0) go through `as` alone.
+#[inline]
+fn round(x: f32) -> i64 {
+    if !(x.abs() < 8_388_608.0) {
+        return x as i64;
+    }
+    let t = x as i64;
+    let fraction = x - t as f32;
+    t + i64::from(fraction >= 0.5) - i64::from(fraction <= -0.5)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::test_scenes::{box_view, seen_box};
+
+    #[test]
+    fn round_is_roundf_to_the_bit() {
+        let mut values = vec![
+            0.0f32,
+            -0.0,
+            0.5,
+            -0.5,
+            1.5,
+            -1.5,
+            2.5,
+            -2.5,
+            0.499_999_97,
+            -0.499_999_97,
+            8_388_607.5,
+            -8_388_607.5,
+            8_388_608.0,
+            1e12,
+            -1e12,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+        ];
+        for k in -2000..2000 {
+            let half = k as f32 * 0.5;
+            values.extend([half, half.next_down(), half.next_up()]);
+        }
+        let mut x = 0.123_456_7f32;
+        for _ in 0..100_000 {
+            x = (x * 7919.0 + 0.618_034).rem_euclid(1500.0) - 750.0;
+            values.push(x);
+        }
+        for x in values {
+            assert_eq!(round(x), x.round() as i64, "{x}");
+        }
+    }
 
     #[test]
     fn a_box_seen_from_above_is_free_above_unknown_inside_and_occupied_on_its_top() {
