@@ -35,6 +35,7 @@ use mvgrasp::geometry::{Intrinsics, IntrinsicsPreset, TriangleMesh, load_mesh};
 use mvgrasp::grasp::GraspObject;
 use mvgrasp::grasp::physics::FailureStage;
 use mvgrasp::infer::Gqcnn;
+use mvgrasp_planner::Ranker;
 use mvgrasp::planner::{
     CemParams, DepthFrom, DepthPredictor, FusionParams, GqcnnPolicy, PlanParams, RgbInput,
     ShippedModel, VirtualScorer, check_grasps, models, plan_grasp,
@@ -138,6 +139,10 @@ struct Args {
     /// reconstruct it ([`mvgrasp::planner::Fusion::solid_mesh`]).
     #[arg(long)]
     dump_recon: bool,
+    /// The fused policies rank their re-scored candidates by the re-score alone, without the
+    /// shipped ranker (`models/ranker_fused.json`).
+    #[arg(long)]
+    no_ranker: bool,
 }
 
 /// A policy of the evaluation: its label, network, views, their distance, and whether the
@@ -357,6 +362,9 @@ fn run(args: &Args) -> Result<(), String> {
                 scorer.params.grasps_per_view = n;
             }
             scorer.params.propose_top_down = !args.no_top_down_proposals;
+            if !args.no_ranker {
+                scorer.ranker = Some(Ranker::shipped().map_err(|e| e.to_string())?);
+            }
             let second = match args.second_scorer.as_deref() {
                 None => None,
                 Some("gqcnn") => Some(load(models::GQCNN_TOPDOWN)?),
@@ -618,6 +626,7 @@ fn dump_rescored(
             "rank": rank,
             "quality": c.quality,
             "view_quality": c.view_quality,
+            "virtual_quality": c.virtual_quality,
             "view": c.view,
             "theta_rad": c.theta_rad,
             "by_scorer": c.by_scorer,

@@ -260,6 +260,7 @@ mod tests {
             theta_rad: view.theta_rad(),
             quality: 0.9,
             view_quality: None,
+            virtual_quality: None,
             by_scorer: false,
         }
     }
@@ -360,6 +361,7 @@ mod tests {
             theta_rad: 0.0,
             quality: 0.9,
             view_quality: None,
+            virtual_quality: None,
             by_scorer: false,
         };
         let across = grasp(down);

@@ -39,6 +39,10 @@ pub struct ScoredGrasp {
     /// The planning network's score on the view, where `quality` is a re-score.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub view_quality: Option<f32>,
+    /// The re-scoring network's score on the candidate's virtual view, where `quality` is the
+    /// ranker's probability built on it ([`crate::Ranker`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub virtual_quality: Option<f32>,
     /// Found by the virtual scorer's own network ([`crate::VirtualScorer::propose`]), not the
     /// policy's.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
@@ -307,6 +311,7 @@ impl GqcnnPolicy {
                 theta_rad: theta,
                 quality: q,
                 view_quality: None,
+                virtual_quality: None,
                 by_scorer: false,
             })
             .collect())

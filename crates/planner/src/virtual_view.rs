@@ -23,6 +23,7 @@ use crate::depth_image::View;
 use crate::error::{PlannerError, Result};
 use crate::fusion::{Fusion, POINT_BUCKET_M};
 use crate::policy::{GqcnnPolicy, Plan, ScoredGrasp};
+use crate::ranker::Ranker;
 use crate::seed::splitmix;
 
 /// Salts the scorer's own proposals' seed apart from the planner's.
@@ -250,6 +251,9 @@ pub struct VirtualScorer {
     second: Option<Gqcnn>,
     /// The views, the candidates re-scored and the perturbations.
     pub params: VirtualViewParams,
+    /// Ranks the re-scored candidates by their modelled chance to hold ([`Ranker`]); `None`:
+    /// by the re-score.
+    pub ranker: Option<Ranker>,
 }
 
 impl VirtualScorer {
@@ -262,16 +266,20 @@ impl VirtualScorer {
             policy: GqcnnPolicy::new(net, max_width_m)?,
             second: None,
             params: VirtualViewParams::default(),
+            ranker: None,
         })
     }
 
     /// The multi-view planner's scorer (`plan --fuse`): the shipped top-down GQ-CNN
-    /// ([`crate::models::GQCNN_TOPDOWN`]) with the default parameters.
+    /// ([`crate::models::GQCNN_TOPDOWN`]) with the default parameters, and the shipped
+    /// [`Ranker`].
     ///
     /// # Errors
     /// As [`VirtualScorer::new`].
     pub fn shipped(max_width_m: f32) -> Result<Self> {
-        Self::new(crate::models::GQCNN_TOPDOWN.load()?, max_width_m)
+        let mut scorer = Self::new(crate::models::GQCNN_TOPDOWN.load()?, max_width_m)?;
+        scorer.ranker = Some(Ranker::shipped()?);
+        Ok(scorer)
     }
 
     /// A second network that scores the same virtual crops, the score then being the geometric
@@ -429,6 +437,10 @@ impl VirtualScorer {
         for (c, q) in head.iter_mut().zip(quality) {
             c.view_quality = Some(c.quality);
             c.quality = q;
+            if let Some(ranker) = &self.ranker {
+                c.virtual_quality = Some(q);
+                c.quality = ranker.probability(c, fusion.table_z_m());
+            }
         }
         // Stable: ties keep the planner's order.
         head.sort_by(|a, b| b.quality.total_cmp(&a.quality));
