@@ -35,12 +35,12 @@ use mvgrasp::geometry::{Intrinsics, IntrinsicsPreset, TriangleMesh, load_mesh};
 use mvgrasp::grasp::GraspObject;
 use mvgrasp::grasp::physics::FailureStage;
 use mvgrasp::infer::Gqcnn;
-use mvgrasp_planner::Ranker;
 use mvgrasp::planner::{
     CemParams, DepthFrom, DepthPredictor, FusionParams, GqcnnPolicy, PlanParams, RgbInput,
     ShippedModel, VirtualScorer, check_grasps, models, plan_grasp,
 };
 use mvgrasp::render::{Backend, Renderer};
+use mvgrasp_planner::Ranker;
 
 /// Plan with each policy on unseen objects; check the chosen grasps in physics.
 #[derive(Parser, Debug)]
@@ -466,7 +466,7 @@ fn run(args: &Args) -> Result<(), String> {
             };
             if let Some(out) = dump.as_mut() {
                 let renderer = args.dump_recon.then_some(&renderer);
-                dump_rescored(out, name, label, mesh, &report, gripper, params, renderer)?;
+                dump_rescored(out, [name, label], mesh, &report, (gripper, params), renderer)?;
             }
             // The approach's angle from straight down.
             let tilt_deg = (-best.grasp.approach().z)
@@ -586,12 +586,10 @@ fn print_table2(policies: &[Policy], tallies: &[Tally]) {
 /// one JSON line each.
 fn dump_rescored(
     out: &mut impl std::io::Write,
-    name: &str,
-    label: &str,
+    [name, label]: [&str; 2],
     mesh: &TriangleMesh,
     report: &mvgrasp::planner::PlanReport,
-    gripper: &mvgrasp::grasp::Gripper,
-    params: &PlanParams,
+    (gripper, params): (&mvgrasp::grasp::Gripper, &PlanParams),
     renderer: Option<&Renderer>,
 ) -> Result<(), String> {
     let rescored: Vec<_> = report

@@ -15,7 +15,8 @@ them out. The features are the Rust ranker's, computed the same way (``features`
 ``Ranker::features``); their names are written beside the weights and checked on loading.
 
 Numpy only (no torch): Newton's method on the L2-penalised log-likelihood (the bias is not
-penalised). Deterministic: the same dumps give the same bytes.
+penalised). Deterministic: the same dumps give the same weights (the file also records the
+date and the commit).
 """
 
 from __future__ import annotations

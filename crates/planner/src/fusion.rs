@@ -194,12 +194,9 @@ impl Fusion {
                 for (i, cell) in slice.iter_mut().enumerate() {
                     let centre = origin
                         + Vec3::new((i % dims[0]) as f32, (i / dims[0]) as f32, z as f32) * voxel;
-                    if carvers
-                        .iter()
-                        .any(|(camera_from_world, view)| {
-                            sees_through(view, camera_from_world, centre, band)
-                        })
-                    {
+                    if carvers.iter().any(|(camera_from_world, view)| {
+                        sees_through(view, camera_from_world, centre, band)
+                    }) {
                         *cell = Occupancy::Free;
                     }
                 }
@@ -427,7 +424,7 @@ fn sees_through(view: &View, camera_from_world: &Pose3, p: Vec3, band: f32) -> b
 /// half or more. Values of 2^23 or more (and NaN, as `as` takes it: 0) go through `as` alone.
 #[inline]
 fn round(x: f32) -> i64 {
-    if !(x.abs() < 8_388_608.0) {
+    if x.is_nan() || x.abs() >= 8_388_608.0 {
         return x as i64;
     }
     let t = x as i64;

@@ -64,8 +64,8 @@ impl Ranker {
             path: path.to_path_buf(),
             detail,
         };
-        let file: RankerFile = serde_json::from_str(text)
-            .map_err(|e| error(format!("not a ranker file: {e}")))?;
+        let file: RankerFile =
+            serde_json::from_str(text).map_err(|e| error(format!("not a ranker file: {e}")))?;
         if file.format != RANKER_FORMAT {
             return Err(error(format!(
                 "format {:?}, expected {RANKER_FORMAT:?}",
@@ -78,10 +78,13 @@ impl Ranker {
                 file.features
             )));
         }
-        let weights: [f32; FEATURES.len()] = file
-            .weights
-            .try_into()
-            .map_err(|w: Vec<f32>| error(format!("{} weights for {} features", w.len(), FEATURES.len())))?;
+        let weights: [f32; FEATURES.len()] = file.weights.try_into().map_err(|w: Vec<f32>| {
+            error(format!(
+                "{} weights for {} features",
+                w.len(),
+                FEATURES.len()
+            ))
+        })?;
         if !weights.iter().all(|w| w.is_finite()) {
             return Err(error("a weight is not finite".into()));
         }
@@ -165,7 +168,10 @@ mod tests {
         // A top-down grasp 3 cm above the table, 4 cm wide.
         let x = Ranker::features(&good, 0.0);
         assert!(x[3].abs() < 0.01, "{x:?}");
-        assert!((x[6] - 0.8).abs() < 1e-6 && (x[7] - 0.6).abs() < 1e-3, "{x:?}");
+        assert!(
+            (x[6] - 0.8).abs() < 1e-6 && (x[7] - 0.6).abs() < 1e-3,
+            "{x:?}"
+        );
     }
 
     #[test]
@@ -187,11 +193,14 @@ mod tests {
             let err = Ranker::from_json(text, path).unwrap_err().to_string();
             assert!(err.contains("r.json") && err.contains(want), "{err}");
         }
-        let short = format!(r#"{{"format": "{RANKER_FORMAT}", "features": {features}, "weights": [1]}}"#);
+        let short =
+            format!(r#"{{"format": "{RANKER_FORMAT}", "features": {features}, "weights": [1]}}"#);
         let err = Ranker::from_json(&short, path).unwrap_err().to_string();
         assert!(err.contains("1 weights for 8 features"), "{err}");
         let weights = format!("[{}]", ["1"; 8].join(","));
-        let fine = format!(r#"{{"format": "{RANKER_FORMAT}", "features": {features}, "weights": {weights}}}"#);
+        let fine = format!(
+            r#"{{"format": "{RANKER_FORMAT}", "features": {features}, "weights": {weights}}}"#
+        );
         Ranker::from_json(&fine, path).unwrap();
     }
 }

@@ -233,7 +233,7 @@ fn draw_crop(
 #[inline]
 fn rounded_index(x: f32, size: usize) -> Option<usize> {
     // round(x) >= 0 exactly when x > -0.5, and round(x) < size when x < size - 0.5.
-    if !(x > -0.5 && x < size as f32 - 0.5) {
+    if x.is_nan() || x <= -0.5 || x >= size as f32 - 0.5 {
         return None;
     }
     // Truncation, then up where the (exactly computed) fraction is a half or more; on
