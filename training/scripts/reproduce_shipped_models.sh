@@ -2,7 +2,7 @@
 # Reproduces the shipped networks of models/ from a clean clone: the grasp and RGB-D datasets
 # they were trained on (training/configs/datasets/, `render`), the three training runs
 # (training/configs/), the exports copied into models/ and the torch-parity fixtures of the
-# Rust tests rewritten.
+# Rust tests rewritten, then the fused planner's ranker (training/scripts/fit_ranker.py).
 #
 #   training/scripts/reproduce_shipped_models.sh            # about four hours on a 2-core CPU
 #   QUICK=1 training/scripts/reproduce_shipped_models.sh    # minutes: 1 object per category,
@@ -105,15 +105,37 @@ sed "${edits[@]}" training/configs/lsm_small.toml > "$config"
     --export "$runs/lsm_small/lsm_small" > "$runs/lsm_small.log" 2>&1 \
     || { echo "training lsm_small failed: see $runs/lsm_small.log" >&2; exit 1; }
 
+ranker_out=$runs/ranker_fused.json
+if [[ $quick != 1 ]]; then
+    for name in gqcnn_small_topdown gqcnn_small_multiview; do
+        cp "$runs/$name/$name.json" "$runs/$name/$name.safetensors" models/
+        cp "$runs/$name/learning_curve.png" "models/$name.png"
+    done
+    cp "$runs/lsm_small/lsm_small.json" "$runs/lsm_small/lsm_small.safetensors" models/
+    cp "$runs/lsm_small/learning_curve.png" models/lsm_small.png
+    "$python" training/scripts/make_parity_fixtures.py
+    ranker_out=models/ranker_fused.json
+fi
+
+# The fused planner's ranker: the planner (with the networks now compiled into plan_eval) on
+# built-in objects 60 to 69 of each category (past every training and evaluation index), every
+# re-scored candidate tried in physics, and a logistic model of the outcome fitted to them; the
+# development set (objects 50 to 54) is dumped the same way and reported beside the fit. About
+# ten minutes here.
+cargo build --release --quiet --example plan_eval
+mkdir -p "$data/ranker"
+for set in "fit 60 $((per_category / 2))" "dev 50 $((per_category / 4))"; do
+    read -r name first count <<< "$set"
+    (( count >= 1 )) || count=1
+    target/release/examples/plan_eval --per-category "$count" --first-index "$first" \
+        --data /nonexistent --policy fused-5 --no-ranker \
+        --dump-rescored "$data/ranker/$name.jsonl" > "$runs/ranker_$name.log"
+done
+"$python" training/scripts/fit_ranker.py "$data/ranker/fit.jsonl" \
+    --validate "$data/ranker/dev.jsonl" --out "$ranker_out"
+
 if [[ $quick == 1 ]]; then
     echo "QUICK=1: exports in $runs (models/ unchanged)"
     exit 0
 fi
-for name in gqcnn_small_topdown gqcnn_small_multiview; do
-    cp "$runs/$name/$name.json" "$runs/$name/$name.safetensors" models/
-    cp "$runs/$name/learning_curve.png" "models/$name.png"
-done
-cp "$runs/lsm_small/lsm_small.json" "$runs/lsm_small/lsm_small.safetensors" models/
-cp "$runs/lsm_small/learning_curve.png" models/lsm_small.png
-"$python" training/scripts/make_parity_fixtures.py
 echo "models/ rewritten; next: cargo test (parity with torch), then re-measure models/README.md and the README's figures"
