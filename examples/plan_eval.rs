@@ -466,7 +466,14 @@ fn run(args: &Args) -> Result<(), String> {
             };
             if let Some(out) = dump.as_mut() {
                 let renderer = args.dump_recon.then_some(&renderer);
-                dump_rescored(out, [name, label], mesh, &report, (gripper, params), renderer)?;
+                dump_rescored(
+                    out,
+                    [name, label],
+                    mesh,
+                    &report,
+                    (gripper, params),
+                    renderer,
+                )?;
             }
             // The approach's angle from straight down.
             let tilt_deg = (-best.grasp.approach().z)
