@@ -50,7 +50,7 @@ struct Args {
     /// top-down, 0.65 m away) fused into one model of the scene; every candidate's open hand
     /// checked against it (nothing observed, no unseen space, above the table); the best 10 of
     /// each view re-scored by the top-down GQ-CNN on virtual views along their approaches (the
-    /// mean over 8 perturbed copies).
+    /// mean over 4 perturbed copies) and ranked by the shipped ranker's chance to hold.
     #[arg(long)]
     fuse: bool,
     /// Plan in the first N of the 10 test views (1: the top-down view alone). Default: 1 for a
@@ -592,7 +592,8 @@ fn summary(model: &str, net: &Gqcnn, plan: &PlanReport, distance_m: f32, fused: 
     let kind = match (net.architecture().pose_inputs == 2, fused) {
         (_, true) => format!(
             "the multi-view planner: the views fused, candidates from {}, the best of each view \
-             re-scored by {} on virtual views",
+             re-scored by {} on virtual views and ranked by their modelled chance to hold \
+             (models/ranker_fused.json)",
             if net.architecture().pose_inputs == 2 {
                 "the multi-view GQ-CNN"
             } else {

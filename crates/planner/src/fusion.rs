@@ -286,10 +286,17 @@ impl Fusion {
     /// The cell holding `p`, if the grid covers it.
     fn index_of(&self, p: Vec3) -> Option<usize> {
         let g = (p - self.origin) / self.voxel_m;
-        let [x, y, z] = [g.x, g.y, g.z].map(|c| c.round());
-        let inside = |c: f32, n: usize| c >= 0.0 && c < n as f32;
-        (inside(x, self.dims[0]) && inside(y, self.dims[1]) && inside(z, self.dims[2]))
-            .then(|| (z as usize * self.dims[1] + y as usize) * self.dims[0] + x as usize)
+        // The nearest cell along each axis, if the grid has it (NaN has none).
+        let cell = |c: f32, n: usize| {
+            let r = round(c);
+            (!c.is_nan() && r >= 0 && (r as usize) < n).then_some(r as usize)
+        };
+        let [x, y, z] = [
+            cell(g.x, self.dims[0])?,
+            cell(g.y, self.dims[1])?,
+            cell(g.z, self.dims[2])?,
+        ];
+        Some((z * self.dims[1] + y) * self.dims[0] + x)
     }
 
     /// What the views say about the cell holding `p`: `None` outside the grid (more than the
