@@ -8,7 +8,7 @@
 //! | `format` | `"mvgrasp-grasps/1"` |
 //! | `frame` | `"given"` (the world of the camera poses given), `"estimated"` (a world on the table fitted in the image: z up, origin where the optical axis meets the table) or `"rendered"` (the table of a rendered scene) |
 //! | `views[]` | per view: `intrinsics` (fx, fy, cx, cy, width, height) and `world_from_camera` (4x4, rows) |
-//! | `grasps[]` | best first: `rank`, `view`, `quality` (the network's; with `plan --fuse` the re-score on its virtual view, and `view_quality` the planning network's), `width_m`, the image grasp (`u`, `v`, `angle_rad`, `depth_m`), `camera_from_gripper` and `world_from_gripper` (4x4, rows; the gripper frame of ARCHITECTURE.md: origin midway between the fingertips, +z the approach, +x the closing axis), and the paper's `p` (metres), `phi_rad`, `theta_rad` |
+//! | `grasps[]` | best first: `rank`, `view`, `quality` (the network's; with `plan --fuse` the ranker's probability that it holds, built on `virtual_quality`, the re-score on its virtual view, and `view_quality`, the planning network's), `width_m`, the image grasp (`u`, `v`, `angle_rad`, `depth_m`), `camera_from_gripper` and `world_from_gripper` (4x4, rows; the gripper frame of ARCHITECTURE.md: origin midway between the fingertips, +z the approach, +x the closing axis), and the paper's `p` (metres), `phi_rad`, `theta_rad` |
 //! | `rejections` | candidates the hand check dropped before the best, by reason |
 //! | `table` | the fitted table (camera frame: `normal`, `camera_height_m`, `inlier_share`, `rms_residual_m`, `points`), when one was fitted |
 
@@ -55,12 +55,16 @@ pub struct GraspEntry {
     pub rank: usize,
     /// The view it was planned in.
     pub view: usize,
-    /// The network's probability that it is robust (the re-score on its virtual view, for the
-    /// multi-view planner's).
+    /// The network's probability that it is robust; for the multi-view planner's, the
+    /// ranker's probability that it holds (`models/ranker_fused.json`).
     pub quality: f32,
     /// With `plan --fuse`: the planning network's score on the view it was found in.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub view_quality: Option<f32>,
+    /// With `plan --fuse`: the re-scoring network's score on its virtual view, which the
+    /// ranker's `quality` is built on.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub virtual_quality: Option<f32>,
     /// Jaw opening at the contacts, metres.
     pub width_m: f32,
     /// The grasp centre's column, pixels.
@@ -133,6 +137,7 @@ impl GraspsFile {
                     view: g.view,
                     quality: g.quality,
                     view_quality: g.view_quality,
+                    virtual_quality: g.virtual_quality,
                     width_m: g.grasp.width_m,
                     u: g.image.center_px[0],
                     v: g.image.center_px[1],

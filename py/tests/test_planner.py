@@ -77,6 +77,7 @@ def test_planning_on_a_mesh_matches_the_cli_and_checks_in_physics(tmp_path: Path
     fused = mvgrasp.Planner(fuse=True).plan_mesh(vertices, triangles, views=3, physics=False)
     assert len(fused.views) == 3 and fused.physics is None
     assert fused.best is not None and fused.best.view_quality is not None
+    assert fused.best.virtual_quality is not None and 0.0 <= fused.best.quality <= 1.0
     with pytest.raises(ValueError, match="views = 11"):
         mvgrasp.Planner().plan_mesh(vertices, triangles, views=11)
     # The CLI's default: depth predicted by the LSM from the colour views, the same bytes.

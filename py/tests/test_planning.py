@@ -107,8 +107,10 @@ def test_several_views_plan_together_and_fused() -> None:
         best = result["grasps"][0]
         x, y, z = best["p"]
         assert abs(x) < 0.03 and abs(y) < 0.04 and 0.0 < z < 0.06, best["p"]
-        # The multi-view planner's choices carry the score they were planned with.
+        # The multi-view planner's choices carry the score they were planned with and the
+        # re-score the ranker's probability is built on.
         assert ("view_quality" in best) == fuse
+        assert ("virtual_quality" in best) == fuse
         assert mvgrasp.plan_views(depths, ks, poses, fuse=fuse) == result
 
 

@@ -48,6 +48,7 @@ class PlannedGrasp:
     phi_rad: float
     theta_rad: float
     view_quality: Optional[float] = None
+    virtual_quality: Optional[float] = None
 
     @property
     def grasp(self) -> Grasp:
