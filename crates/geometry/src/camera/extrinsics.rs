@@ -62,6 +62,7 @@ impl Camera {
     }
 
     /// Maps world points to the camera frame.
+    #[inline]
     pub fn camera_from_world(&self) -> Pose3 {
         self.world_from_camera.inverse()
     }
@@ -77,12 +78,14 @@ impl Camera {
     }
 
     /// The pixel where a world point projects, or `None` behind the camera.
+    #[inline]
     pub fn project(&self, world_point: Vec3) -> Option<[f32; 2]> {
         self.intrinsics
             .project(self.world_from_camera.inverse_transform_point(world_point))
     }
 
     /// The world point at pixel (u, v) and depth (z along the optical axis) `depth_m`.
+    #[inline]
     pub fn unproject(&self, u: f32, v: f32, depth_m: f32) -> Vec3 {
         self.world_from_camera
             .transform_point(self.intrinsics.unproject(u, v, depth_m))

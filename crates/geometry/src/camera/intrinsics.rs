@@ -276,6 +276,7 @@ impl Intrinsics {
     }
 
     /// The pixel (u, v) where a point in the camera frame projects, or `None` behind the camera.
+    #[inline]
     pub fn project(&self, camera_point: Vec3) -> Option<[f32; 2]> {
         (camera_point.z > 0.0).then(|| {
             [
@@ -286,6 +287,7 @@ impl Intrinsics {
     }
 
     /// The camera-frame point at pixel (u, v) whose depth (z) is `depth_m`.
+    #[inline]
     pub fn unproject(&self, u: f32, v: f32, depth_m: f32) -> Vec3 {
         Vec3::new(
             (u - self.cx) * depth_m / self.fx,
