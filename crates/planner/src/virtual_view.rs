@@ -143,7 +143,7 @@ fn draw_crop(
     let r = Mat3::from_quat(camera_from_world.rotation);
     let t = camera_from_world.translation;
     // Only the buckets whose cube can reach the crop's frustum (|x|, |y| < k z, z > 0): the
-    // crop sees a few centimetres around the grasp of the fused points' 20 or so. A cube is
+    // crop sees a few centimetres around the grasp, the fused points span 20 or so. A cube is
     // skipped when its bounding sphere (grown by a millimetre against rounding) lies wholly
     // beyond one of the frustum's planes; the points drawn, and so the crop, are the same.
     let k = (half + 0.5) / focal;
@@ -415,8 +415,10 @@ impl VirtualScorer {
 
     /// Re-scores the best `params.candidates_per_view` of each view in `plan` (and as many of
     /// the scorer's own candidates in each view, apart: [`ScoredGrasp::quota`]) on their virtual
-    /// views and ranks them by that score ahead of the rest (which keep their order); each
-    /// keeps the score it was planned with in [`ScoredGrasp::view_quality`].
+    /// views and ranks them by that score (with a [`Ranker`], by its probability built on that
+    /// score, which then stays in [`ScoredGrasp::virtual_quality`]) ahead of the rest (which
+    /// keep their order); each keeps the score it was planned with in
+    /// [`ScoredGrasp::view_quality`].
     ///
     /// # Errors
     /// A network error.
@@ -506,6 +508,44 @@ mod tests {
             }
         }
         assert!(culled_any);
+    }
+
+    #[test]
+    fn the_ranker_orders_the_re_scored_candidates_by_its_probability() {
+        let view = box_view(false);
+        let views = std::slice::from_ref(&view);
+        let fusion = Fusion::build(views, &FusionParams::default()).unwrap();
+        let mut scorer = VirtualScorer::shipped(0.08).unwrap();
+        scorer.params.candidates_per_view = 4;
+        scorer.params.perturbations = 1;
+        let planned = scorer.policy.plan(views, 3).unwrap();
+        assert!(planned.candidates.len() > 4);
+        // With the ranker: the first 4 re-scored, their re-score kept beside the probability
+        // they are ranked by.
+        let mut ranked = planned.clone();
+        scorer.rescore(&mut ranked, &fusion, 1).unwrap();
+        let ranker = scorer.ranker.clone().unwrap();
+        let head = &ranked.candidates[..4];
+        for c in head {
+            let rescore = c.virtual_quality.unwrap();
+            assert!((0.0..=1.0).contains(&rescore));
+            assert_eq!(c.quality, ranker.probability(c, fusion.table_z_m()));
+            assert!(c.view_quality.is_some());
+        }
+        assert!(head.windows(2).all(|w| w[0].quality >= w[1].quality));
+        // Without it: ranked by the re-score itself, which is the ranker's input above.
+        scorer.ranker = None;
+        let mut plain = planned.clone();
+        scorer.rescore(&mut plain, &fusion, 1).unwrap();
+        let mut rescores: Vec<f32> = head.iter().map(|c| c.virtual_quality.unwrap()).collect();
+        rescores.sort_by(|a, b| b.total_cmp(a));
+        let plain_head: Vec<f32> = plain.candidates[..4].iter().map(|c| c.quality).collect();
+        assert_eq!(plain_head, rescores);
+        assert!(
+            plain.candidates[..4]
+                .iter()
+                .all(|c| c.virtual_quality.is_none())
+        );
     }
 
     #[test]
