@@ -94,7 +94,9 @@ struct Args {
     mvgqcnn: Option<PathBuf>,
     /// The policies (topdown, per-view, fused-3, fused-5, fused-10, and lsm-fused-N or
     /// rgb-fused-N: the fused planner on depth predicted from N RGB views by the Learnt Stereo
-    /// Machine or the plane-sweep baseline); all but the RGB ones when none is given.
+    /// Machine or the plane-sweep baseline; lsm-topdown-N or rgb-topdown-N: the top-down GQ-CNN
+    /// in the first, top-down, of those N predicted views); all but the RGB ones when none is
+    /// given.
     #[arg(long = "policy")]
     policies: Vec<String>,
     /// The first built-in object index of each category (30: the report set; 50: the
@@ -155,6 +157,9 @@ struct Policy {
     fused: bool,
     /// Depth predicted from RGB (by this predictor) instead of rendered.
     rgb: Option<DepthFrom>,
+    /// Plan in the first view only (the top-down one), the others informing the predicted
+    /// depth.
+    top_down_of_rgb: bool,
 }
 
 /// The policies named on the command line (all without names, the top-down one alone with
@@ -178,6 +183,7 @@ fn policies(args: &Args) -> Result<Vec<Policy>, String> {
                     radius_m: 0.7,
                     fused: false,
                     rgb: None,
+                    top_down_of_rgb: false,
                 },
                 "per-view" => Policy {
                     label: "MV-GQ-CNN, 10 views".into(),
@@ -186,6 +192,7 @@ fn policies(args: &Args) -> Result<Vec<Policy>, String> {
                     radius_m: args.mv_radius_m,
                     fused: false,
                     rgb: None,
+                    top_down_of_rgb: false,
                 },
                 _ => {
                     let rgb = if name.starts_with("lsm-") {
@@ -195,30 +202,39 @@ fn policies(args: &Args) -> Result<Vec<Policy>, String> {
                     } else {
                         None
                     };
-                    let views = name
-                        .trim_start_matches("rgb-")
-                        .trim_start_matches("lsm-")
-                        .strip_prefix("fused-")
+                    let rest = name.trim_start_matches("rgb-").trim_start_matches("lsm-");
+                    // topdown-N: the top-down GQ-CNN in the first (top-down) of N RGB views.
+                    let top_down = rgb.is_some() && rest.starts_with("topdown-");
+                    let views = rest
+                        .strip_prefix(if top_down { "topdown-" } else { "fused-" })
                         .and_then(|n| n.parse::<usize>().ok())
                         .filter(|&n| n > 0)
                         .ok_or_else(|| {
                             format!(
-                                "--policy {name}: expected topdown, per-view, fused-N, lsm-fused-N or rgb-fused-N (N views)"
+                                "--policy {name}: expected topdown, per-view, fused-N, \
+                                 lsm-fused-N, rgb-fused-N, lsm-topdown-N or rgb-topdown-N \
+                                 (N views)"
                             )
                         })?;
+                    let kind = if top_down { "top-down GQ-CNN" } else { "fused" };
                     Policy {
                         label: match rgb {
-                            Some(DepthFrom::Lsm) => format!("fused, {views} RGB views, LSM"),
+                            Some(DepthFrom::Lsm) => format!("{kind}, {views} RGB views, LSM"),
                             Some(DepthFrom::Baseline) => {
-                                format!("fused, {views} RGB views, baseline")
+                                format!("{kind}, {views} RGB views, baseline")
                             }
                             None => format!("fused, {views} views"),
                         },
-                        model: models::MVGQCNN,
+                        model: if top_down {
+                            models::GQCNN_TOPDOWN
+                        } else {
+                            models::MVGQCNN
+                        },
                         views,
                         radius_m: args.mv_radius_m,
-                        fused: true,
+                        fused: !top_down,
                         rgb,
+                        top_down_of_rgb: top_down,
                     }
                 }
             })
@@ -323,6 +339,12 @@ fn run(args: &Args) -> Result<(), String> {
         };
         params.labels.physics.grip_true_surface = args.grip_surface;
         params.views.radius_m = p.radius_m;
+        if p.top_down_of_rgb {
+            // The views spread over the whole cap as the fused policies' are; the plan in the
+            // first, top-down one.
+            params.views.count = p.views;
+            params.plan_views = Some(1);
+        }
         if p.fused {
             // The views spread over the whole cap, not the first of ten.
             params.views.count = p.views;

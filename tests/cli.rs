@@ -31,11 +31,15 @@ fn plan_with_no_arguments_plans_on_depth_from_rgb_beside_the_rendered_depth() {
     assert!(text.contains("training views: 20 views"), "{text}");
     assert!(text.contains("test views:     10 views"), "{text}");
     assert!(text.contains("stable"), "{text}");
-    // RGB -> depth by the shipped LSM -> the multi-view planner in 5 views.
+    // RGB -> depth by the shipped LSM from 5 views -> the top-down GQ-CNN in the top-down one.
     assert!(
-        text.contains("plan: gqcnn_small_multiview (the multi-view planner")
+        text.contains("plan: gqcnn_small_topdown (GQ-CNN in the first, top-down view")
             && text.contains("5 view(s) 0.65 m away"),
         "{text}"
+    );
+    assert!(
+        text.contains("      1   22.9 deg           0             -"),
+        "only the top-down view plans: {text}"
     );
     assert!(
         text.contains("predicted by the Learnt Stereo Machine (models/lsm_small)"),

@@ -80,14 +80,18 @@ def test_planning_on_a_mesh_matches_the_cli_and_checks_in_physics(tmp_path: Path
     assert fused.best.virtual_quality is not None and 0.0 <= fused.best.quality <= 1.0
     with pytest.raises(ValueError, match="views = 11"):
         mvgrasp.Planner().plan_mesh(vertices, triangles, views=11)
-    # The CLI's default: depth predicted by the LSM from the colour views, the same bytes.
+    # The CLI's default: depth predicted by the LSM from 5 colour views, the top-down GQ-CNN
+    # in the top-down one; the same bytes.
     plan_cli("--category", "box", "--no-physics", "--out", str(tmp_path / "lsm"))
-    learnt = mvgrasp.Planner(fuse=True).plan_mesh(vertices, triangles, physics=False,
-                                                  depth_from="lsm")  # fmt: skip
+    learnt = mvgrasp.Planner().plan_mesh(vertices, triangles, physics=False, depth_from="lsm")
     assert learnt.grasps_json.encode() == (tmp_path / "lsm" / "grasps.json").read_bytes()
     assert learnt.timings["depth_s"] > 0 and len(learnt.views) == 5
-    with pytest.raises(ValueError, match="multi-view planner"):
-        mvgrasp.Planner().plan_mesh(vertices, triangles, views=5, depth_from="lsm")
+    assert learnt.grasps and all(g.view == 0 for g in learnt.grasps)
+    # --fuse: the multi-view planner on the same predicted views.
+    plan_cli("--category", "box", "--no-physics", "--fuse", "--out", str(tmp_path / "lsm_fused"))
+    fused_rgb = mvgrasp.Planner(fuse=True).plan_mesh(vertices, triangles, physics=False,
+                                                     depth_from="lsm")  # fmt: skip
+    assert fused_rgb.grasps_json.encode() == (tmp_path / "lsm_fused" / "grasps.json").read_bytes()
     with pytest.raises(ValueError, match="at least 2 views"):
         mvgrasp.Planner(fuse=True).plan_mesh(vertices, triangles, views=1, depth_from="lsm")
     with pytest.raises(ValueError, match="depth_from"):

@@ -228,7 +228,7 @@ fn run(args: &Args) -> Result<bool, String> {
                 policy.net(),
                 &plan,
                 params.views.radius_m,
-                options.fuse
+                (options.fuse, params.plan_views)
             )
         );
         if let (Some(from), Some(truth)) = (options.depth_from, &on_truth) {
@@ -290,12 +290,10 @@ fn depth_from_of(args: &Args) -> Result<Option<DepthFrom>, String> {
 
 /// The options every kind of plan shares.
 fn options_of(args: &Args) -> PlanOptions {
-    // Depth from RGB goes to the multi-view planner.
-    let from_rgb = args.depth.is_none()
-        && args.views_dir.is_none()
-        && depth_from_of(args).is_ok_and(|d| d.is_some());
+    // A folder of RGB views goes to the multi-view planner (its views need not hold a top-down
+    // one); a mesh's predicted views to the top-down GQ-CNN in the top-down one, unless --fuse.
     PlanOptions {
-        fuse: args.fuse || from_rgb,
+        fuse: args.fuse || args.rgb.is_some(),
         cem: args.cem,
         hand_check: !args.no_hand_check,
         seed: args.object.seed,
@@ -586,10 +584,19 @@ fn truth_comparison(from: DepthFrom, plan: &PlanReport, truth: &PlanReport) -> S
     )
 }
 
-fn summary(model: &str, net: &Gqcnn, plan: &PlanReport, distance_m: f32, fused: bool) -> String {
+fn summary(
+    model: &str,
+    net: &Gqcnn,
+    plan: &PlanReport,
+    distance_m: f32,
+    (fused, planned_in): (bool, Option<usize>),
+) -> String {
     use std::fmt::Write;
     let mut s = String::new();
     let kind = match (net.architecture().pose_inputs == 2, fused) {
+        (false, false) if planned_in == Some(1) => {
+            "GQ-CNN in the first, top-down view; every view predicts the depth".into()
+        }
         (_, true) => format!(
             "the multi-view planner: the views fused, candidates from {}, the best of each view \
              re-scored by {} on virtual views and ranked by their modelled chance to hold \

@@ -30,6 +30,9 @@ pub struct PlanParams {
     pub views: HemisphereLayout,
     /// Use only the first this many views (1: the top-down view alone, Dex-Net 2.0's setting).
     pub max_views: usize,
+    /// Plan in the first this many of the views only; the others still inform the depth
+    /// predicted from RGB ([`PlanParams::depth_from_rgb`]). `None`: plan in every view.
+    pub plan_views: Option<usize>,
     /// Camera intrinsics.
     pub intrinsics: Intrinsics,
     /// Which pose the object rests in: an index into its offered resting poses
@@ -65,6 +68,7 @@ impl Default for PlanParams {
         Self {
             views: HemisphereLayout::paper_test(),
             max_views: usize::MAX,
+            plan_views: None,
             // The grasp datasets' camera (`GraspDatasetConfig::default().intrinsics`).
             intrinsics: Intrinsics::preset(IntrinsicsPreset::PhoxiS),
             stable_pose: 0,
@@ -345,14 +349,15 @@ pub fn plan_grasp(
     let scene = render_scene(renderer, &object, params)?;
     let render_s = started.elapsed().as_secs_f64();
 
+    let planned = params
+        .plan_views
+        .map_or(scene.views.len(), |n| n.clamp(1, scene.views.len()));
+    let views = &scene.views[..planned];
     let started = Instant::now();
-    let fusion = params
-        .fusion
-        .as_ref()
-        .and_then(|f| Fusion::build(&scene.views, f));
+    let fusion = params.fusion.as_ref().and_then(|f| Fusion::build(views, f));
     let fuse_s = started.elapsed().as_secs_f64();
     let plan = policy.plan_checked(
-        &scene.views,
+        views,
         fusion.as_ref(),
         &gripper,
         params.hand_check,
@@ -367,20 +372,21 @@ pub fn plan_grasp(
         .map(|best| check_grasp(&object, &scene.table_from_object, &best, &gripper, params))
         .transpose()?;
     let check_s = started.elapsed().as_secs_f64();
-    let views = scene
+    // Every view, planned in or not (a view only predicting depth has no candidate).
+    let summaries = scene
         .views
         .iter()
         .enumerate()
         .map(|(i, view)| ViewSummary {
             elevation_deg: view.theta_rad().to_degrees(),
-            candidates: plan.candidates_per_view[i],
+            candidates: plan.candidates_per_view.get(i).copied().unwrap_or(0),
             best_quality: plan.best_in_view(i).map(|c| c.quality),
         })
         .collect();
     Ok(PlanReport {
         stable_pose: scene.stable_pose,
         stable_pose_probability: scene.stable_pose_probability,
-        views,
+        views: summaries,
         cameras: scene.views.iter().map(|v| v.camera).collect(),
         table_from_object: scene.table_from_object,
         best_paper: best.map(|b| b.grasp.to_paper()),

@@ -279,9 +279,10 @@ class Planner:
         """Plans on a mesh as ``plan --mesh --depth-from DEPTH_FROM`` does: rests it on the
         table in a stable pose, renders the views' depth (``"rendered"``, the default here) or
         renders them in colour and predicts their depth (``"lsm"``, the CLI's default, or
-        ``"baseline"``; the multi-view planner: ``fuse=True``), plans, and checks the best grasp
-        analytically and (with ``physics``) in the rapier trial (:attr:`PlanResult.physics`).
-        Timings per stage."""
+        ``"baseline"``: 5 views unless ``views`` says otherwise, the top-down GQ-CNN planning in
+        the first, top-down one, or the multi-view planner in all with ``fuse=True``), plans, and
+        checks the best grasp analytically and (with ``physics``) in the rapier trial
+        (:attr:`PlanResult.physics`). Timings per stage."""
         started = time.perf_counter()
         result = _native.plan_mesh(
             vertices,
