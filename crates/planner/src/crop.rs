@@ -15,6 +15,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::depth_image::DepthImage;
+use crate::rounding::floor;
 
 /// How a grasp's crop is cut (Dex-Net 2.0: a 96 x 96 window scaled to 32 x 32).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -204,18 +205,6 @@ fn sample(depth: &DepthImage, [u, v]: [f32; 2]) -> f32 {
     }
 }
 
-/// `x.floor()` for a finite `x`, the same value to the bit, without a call: the crate is built
-/// for baseline x86-64, where `floorf` is a libm call, and a crop takes nine samples a pixel
-/// (the calls were a sixth of a plan's crop time). Values of 2^23 or more are integers already.
-#[inline]
-fn floor(x: f32) -> f32 {
-    if x.abs() >= 8_388_608.0 {
-        return x;
-    }
-    let t = (x as i32 as f32).copysign(x);
-    if t > x { t - 1.0 } else { t }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -267,50 +256,6 @@ mod tests {
         let crop = crop_depth(&depth, [2.0, 2.0], 0.0, &CropParams::default());
         assert_eq!(crop[0], 0.0);
         assert_eq!(crop[16 * 32 + 16], 0.7);
-    }
-
-    #[test]
-    fn floor_is_floorf_to_the_bit() {
-        let mut values = vec![
-            0.0f32,
-            -0.0,
-            0.5,
-            -0.5,
-            1.0,
-            -1.0,
-            1.5,
-            -1.5,
-            2.999_999_8,
-            -2.999_999_8,
-            8_388_607.5,
-            -8_388_607.5,
-            8_388_608.0,
-            -8_388_609.0,
-            1e20,
-            -1e20,
-            f32::MAX,
-            f32::MIN,
-            f32::MIN_POSITIVE,
-            -f32::MIN_POSITIVE,
-            1e-45,
-            -1e-45,
-        ];
-        // A sweep over the image range at odd steps, and every power-of-two neighbourhood.
-        values.extend((0..200_000).map(|i| -1000.0 + i as f32 * 0.010_007));
-        for e in -30..40 {
-            let p = 2.0f32.powi(e);
-            values.extend([
-                p,
-                -p,
-                p.next_up(),
-                p.next_down(),
-                -p.next_up(),
-                -p.next_down(),
-            ]);
-        }
-        for x in values {
-            assert_eq!(floor(x).to_bits(), x.floor().to_bits(), "floor({x})");
-        }
     }
 
     /// The crop sample by sample through `CropFrame::image_point` (the form before the

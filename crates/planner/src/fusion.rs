@@ -17,6 +17,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::depth_image::View;
+use crate::rounding::{round, rounded_index};
 
 /// A box's lower and upper corners, world.
 type Bounds = (Vec3, Vec3);
@@ -287,15 +288,11 @@ impl Fusion {
     /// The cell holding `p`, if the grid covers it.
     fn index_of(&self, p: Vec3) -> Option<usize> {
         let g = (p - self.origin) / self.voxel_m;
-        // The nearest cell along each axis, if the grid has it (NaN has none).
-        let cell = |c: f32, n: usize| {
-            let r = round(c);
-            (!c.is_nan() && r >= 0 && (r as usize) < n).then_some(r as usize)
-        };
+        // The nearest cell along each axis, if the grid has it.
         let [x, y, z] = [
-            cell(g.x, self.dims[0])?,
-            cell(g.y, self.dims[1])?,
-            cell(g.z, self.dims[2])?,
+            rounded_index(g.x, self.dims[0])?,
+            rounded_index(g.y, self.dims[1])?,
+            rounded_index(g.z, self.dims[2])?,
         ];
         Some((z * self.dims[1] + y) * self.dims[0] + x)
     }
@@ -427,59 +424,10 @@ fn sees_through(view: &View, camera_from_world: &Pose3, p: Vec3, band: f32) -> b
     d > 0.0 && q.z < d - band
 }
 
-/// `x.round() as i64` without a call (`roundf` is a libm call on baseline x86-64, two per cell
-/// and view here): truncation, then away from zero where the (exactly computed) fraction is a
-/// half or more. Values of 2^23 or more (and NaN, as `as` takes it: 0) go through `as` alone.
-#[inline]
-fn round(x: f32) -> i64 {
-    if x.is_nan() || x.abs() >= 8_388_608.0 {
-        return x as i64;
-    }
-    let t = x as i64;
-    let fraction = x - t as f32;
-    t + i64::from(fraction >= 0.5) - i64::from(fraction <= -0.5)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::test_scenes::{box_view, seen_box};
-
-    #[test]
-    fn round_is_roundf_to_the_bit() {
-        let mut values = vec![
-            0.0f32,
-            -0.0,
-            0.5,
-            -0.5,
-            1.5,
-            -1.5,
-            2.5,
-            -2.5,
-            0.499_999_97,
-            -0.499_999_97,
-            8_388_607.5,
-            -8_388_607.5,
-            8_388_608.0,
-            1e12,
-            -1e12,
-            f32::NAN,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-        ];
-        for k in -2000..2000 {
-            let half = k as f32 * 0.5;
-            values.extend([half, half.next_down(), half.next_up()]);
-        }
-        let mut x = 0.123_456_7f32;
-        for _ in 0..100_000 {
-            x = (x * 7919.0 + 0.618_034).rem_euclid(1500.0) - 750.0;
-            values.push(x);
-        }
-        for x in values {
-            assert_eq!(round(x), x.round() as i64, "{x}");
-        }
-    }
 
     #[test]
     fn a_box_seen_from_above_is_free_above_unknown_inside_and_occupied_on_its_top() {

@@ -11,6 +11,7 @@ pub mod models;
 pub mod policy;
 pub mod ranker;
 pub mod reconstruct;
+mod rounding;
 pub mod sampler;
 pub mod seed;
 pub mod table;

@@ -24,6 +24,7 @@ use crate::error::{PlannerError, Result};
 use crate::fusion::{Fusion, POINT_BUCKET_M};
 use crate::policy::{GqcnnPolicy, Plan, ScoredGrasp};
 use crate::ranker::Ranker;
+use crate::rounding::rounded_index;
 use crate::seed::splitmix;
 
 /// Salts the scorer's own proposals' seed apart from the planner's.
@@ -225,21 +226,6 @@ fn draw_crop(
         }
     }
     depth
-}
-
-/// `x.round()` as an index below `size`, or `None` where it falls outside `0..size` (or `x`
-/// is not a number), without a call: `roundf` is a libm call on baseline x86-64, two a point
-/// per virtual crop, and they were a third of its time.
-#[inline]
-fn rounded_index(x: f32, size: usize) -> Option<usize> {
-    // round(x) >= 0 exactly when x > -0.5, and round(x) < size when x < size - 0.5.
-    if x.is_nan() || x <= -0.5 || x >= size as f32 - 0.5 {
-        return None;
-    }
-    // Truncation, then up where the (exactly computed) fraction is a half or more; on
-    // (-0.5, 0) it truncates to 0, as round does.
-    let t = x as i32;
-    Some((t + i32::from(x - t as f32 >= 0.5)) as usize)
 }
 
 /// A network that re-scores candidates on virtual views of the fused scene.
@@ -546,43 +532,6 @@ mod tests {
                 .iter()
                 .all(|c| c.virtual_quality.is_none())
         );
-    }
-
-    #[test]
-    fn rounded_index_is_round_to_the_bit() {
-        let reference = |x: f32, size: usize| {
-            let r = x.round();
-            (r >= 0.0 && r < size as f32).then_some(r as usize)
-        };
-        let mut values = vec![
-            -0.5f32,
-            -0.499_999_97,
-            -0.0,
-            0.0,
-            0.499_999_97,
-            0.5,
-            1.5,
-            2.5,
-            31.499_998,
-            31.5,
-            32.0,
-            -1.0,
-            f32::NAN,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-            1e30,
-            -1e30,
-        ];
-        let mut rng = ChaCha8Rng::seed_from_u64(5);
-        values.extend((0..200_000).map(|_| rng.random_range(-3.0f32..35.0)));
-        // Exact halves and their neighbours.
-        for k in -4..70 {
-            let half = k as f32 * 0.5;
-            values.extend([half, half.next_down(), half.next_up()]);
-        }
-        for x in values {
-            assert_eq!(rounded_index(x, 32), reference(x, 32), "{x}");
-        }
     }
 
     #[test]
