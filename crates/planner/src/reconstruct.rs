@@ -1,8 +1,10 @@
 //! The object as the fused views allow it to be: a closed mesh of every cell above the table
 //! that some view observed a surface in, or that no view saw into, connected to the object's
 //! observed surface ([`Fusion`]). Hidden space counts as solid, so the mesh is the largest
-//! object the views are consistent with (a visual hull carved by depth); the planner can put
-//! it in the physics trial to try its candidates before a robot does.
+//! object the views are consistent with (a visual hull carved by depth). `plan_eval
+//! --dump-recon` tries each candidate in the physics trial on it; choosing by that trial did
+//! not pick grasps that held more often (README, "The multi-view planner"), so the planner
+//! does not use it.
 
 use std::collections::VecDeque;
 
@@ -11,8 +13,8 @@ use mvgrasp_geometry::{TriangleMesh, Vec3};
 
 use crate::fusion::{Fusion, Occupancy};
 
-/// Cells whose centre stands less than this above the table are the table's, metres (the
-/// grid's lowest layer is centred on the table).
+/// The grid's lowest layers of cells that are the table's, not the object's (the lowest is
+/// centred on the table).
 const TABLE_LAYERS: usize = 1;
 
 /// The surface's level in the field (-1 at a solid cell's centre, +1 at an empty one's): -0.5
@@ -63,8 +65,9 @@ impl Fusion {
         solid
     }
 
-    /// The solid cells' surface, meshed (closed, outward normals): the boundary runs midway
-    /// between solid and empty cell centres. `None` when no cell is solid or the mesher fails.
+    /// The solid cells' surface, meshed (closed, outward normals): the boundary runs a quarter
+    /// of a cell outside the outermost solid cells' centres. `None` when no cell is
+    /// solid or the mesher fails.
     pub fn solid_mesh(&self) -> Option<TriangleMesh> {
         let solid = self.solid_cells();
         if !solid.contains(&true) {
