@@ -241,29 +241,8 @@ fn box_meets_view(
 mod tests {
     use super::*;
     use crate::depth_image::Mask;
-    use crate::test_scenes::box_view;
-
+    use crate::test_scenes::{box_view, centred_candidate as candidate};
     use mvgrasp_grasp::ImageGrasp;
-
-    fn candidate(view: &View, angle_rad: f32, depth_m: f32, width_m: f32) -> ScoredGrasp {
-        let k = view.depth.intrinsics();
-        let image = ImageGrasp {
-            center_px: [k.cx, k.cy],
-            angle_rad,
-            depth_m,
-            width_m,
-        };
-        ScoredGrasp {
-            view: 0,
-            image,
-            grasp: image.to_world(&view.camera),
-            theta_rad: view.theta_rad(),
-            quality: 0.9,
-            view_quality: None,
-            virtual_quality: None,
-            by_scorer: false,
-        }
-    }
 
     #[test]
     fn the_open_hand_must_clear_what_the_camera_saw() {

@@ -133,35 +133,22 @@ impl Ranker {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::test_scenes::box_view;
-    use mvgrasp_grasp::ImageGrasp;
+    use crate::test_scenes::{box_view, centred_candidate};
     use std::path::Path;
 
-    fn candidate(quality: f32, view_quality: f32, by_scorer: bool) -> ScoredGrasp {
-        let view = box_view(false);
-        let k = view.depth.intrinsics();
-        let image = ImageGrasp {
-            center_px: [k.cx, k.cy],
-            angle_rad: 0.0,
-            depth_m: 0.67,
-            width_m: 0.04,
-        };
+    /// A top-down grasp 4 cm wide across the box 3 cm above the table, with these scores.
+    fn candidate(quality: f32, view_quality: f32) -> ScoredGrasp {
         ScoredGrasp {
-            view: 0,
-            image,
-            grasp: image.to_world(&view.camera),
-            theta_rad: view.theta_rad(),
             quality,
             view_quality: Some(view_quality),
-            virtual_quality: None,
-            by_scorer,
+            ..centred_candidate(&box_view(false), 0.0, 0.67, 0.04)
         }
     }
 
     #[test]
     fn the_shipped_ranker_loads_and_prefers_the_better_scored_candidate() {
         let ranker = Ranker::shipped().unwrap();
-        let (good, poor) = (candidate(0.99, 0.9, false), candidate(0.6, 0.9, false));
+        let (good, poor) = (candidate(0.99, 0.9), candidate(0.6, 0.9));
         let p = ranker.probability(&good, 0.0);
         assert!((0.0..=1.0).contains(&p));
         assert!(p > ranker.probability(&poor, 0.0));

@@ -2,7 +2,10 @@
 
 use mvgrasp_geometry::{Camera, Intrinsics, IntrinsicsPreset, Vec3};
 
+use mvgrasp_grasp::ImageGrasp;
+
 use crate::depth_image::{DepthImage, View};
+use crate::policy::ScoredGrasp;
 
 /// A box `half_m` (x, y half extents, metres) and 5 cm tall on a table 0.7 m below a camera
 /// with `k` looking straight down, as that camera sees it (exact per-pixel depth). Where
@@ -81,4 +84,31 @@ pub(crate) fn seen_box(side: f32) -> View {
         }
     }
     View::new(0, camera, DepthImage::new(k, depth).unwrap()).unwrap()
+}
+
+/// A candidate of quality 0.9 at the centre of `view`'s image, closing at `angle_rad`, at
+/// `depth_m` and `width_m`, lifted to the world with the view's camera.
+pub(crate) fn centred_candidate(
+    view: &View,
+    angle_rad: f32,
+    depth_m: f32,
+    width_m: f32,
+) -> ScoredGrasp {
+    let k = view.depth.intrinsics();
+    let image = ImageGrasp {
+        center_px: [k.cx, k.cy],
+        angle_rad,
+        depth_m,
+        width_m,
+    };
+    ScoredGrasp {
+        view: 0,
+        image,
+        grasp: image.to_world(&view.camera),
+        theta_rad: view.theta_rad(),
+        quality: 0.9,
+        view_quality: None,
+        virtual_quality: None,
+        by_scorer: false,
+    }
 }
