@@ -594,9 +594,10 @@ fn summary(
     use std::fmt::Write;
     let mut s = String::new();
     let kind = match (net.architecture().pose_inputs == 2, fused) {
-        (false, false) if planned_in == Some(1) => {
-            "GQ-CNN in the first, top-down view; every view predicts the depth".into()
-        }
+        (multi, false) if planned_in == Some(1) => format!(
+            "{} in the first, top-down view; every view predicts the depth",
+            if multi { "multi-view GQ-CNN" } else { "GQ-CNN" }
+        ),
         (_, true) => format!(
             "the multi-view planner: the views fused, candidates from {}, the best of each view \
              re-scored by {} on virtual views and ranked by their modelled chance to hold \

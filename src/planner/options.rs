@@ -30,8 +30,9 @@ pub struct PlanOptions {
     pub seed: u64,
     /// On a mesh: the camera's intrinsics.
     pub camera: IntrinsicsPreset,
-    /// On a mesh: plan in the first this many test views; `None`: the network's setting
-    /// ([`ViewSetting`]), or [`FUSED_VIEWS`] when fusing.
+    /// On a mesh: plan in the first this many test views (with `depth_from` and no `fuse`:
+    /// predict the depth of this many, plan in the first); `None`: the network's setting
+    /// ([`ViewSetting`]), or [`FUSED_VIEWS`] when fusing or predicting depth.
     pub views: Option<usize>,
     /// On a mesh: the cameras' distance from the object, metres; `None`: the network's.
     pub distance_m: Option<f32>,
@@ -152,17 +153,17 @@ impl PlanOptions {
                 depth: DepthPredictor::shipped(from)?,
                 per_face: false,
             });
-            if !self.fuse {
-                // Every view predicts depth; the network plans in the first, top-down.
-                params.views.count = views;
-                params.plan_views = Some(1);
-            }
+            // Without fusion every view predicts depth, and the network plans in the first,
+            // top-down one.
+            params.plan_views = (!self.fuse).then_some(1);
         }
         params.max_views = views;
         params.views.radius_m = distance_m;
-        if self.fuse {
+        if self.fuse || self.depth_from.is_some() {
             // The views spread over the whole cap (the first top-down), not the first of ten.
             params.views.count = views;
+        }
+        if self.fuse {
             params.fusion = Some(FusionParams::default());
         }
         let gripper = params.labels.gripper()?;

@@ -351,7 +351,7 @@ pub fn plan_grasp(
 
     let planned = params
         .plan_views
-        .map_or(scene.views.len(), |n| n.clamp(1, scene.views.len()));
+        .map_or(scene.views.len(), |n| n.max(1).min(scene.views.len()));
     let views = &scene.views[..planned];
     let started = Instant::now();
     let fusion = params.fusion.as_ref().and_then(|f| Fusion::build(views, f));
