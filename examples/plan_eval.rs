@@ -40,7 +40,7 @@ use mvgrasp::planner::{
     ShippedModel, VirtualScorer, check_grasps, models, plan_grasp,
 };
 use mvgrasp::render::{Backend, Renderer};
-use mvgrasp_planner::Ranker;
+use mvgrasp_planner::{Ranker, tilt_rad};
 
 /// Plan with each policy on unseen objects; check the chosen grasps in physics.
 #[derive(Parser, Debug)]
@@ -416,9 +416,9 @@ fn run(args: &Args) -> Result<(), String> {
         "object                         policy                 quality  free  robust  physics"
     );
     for (name, group, mesh) in &objects {
-        // For --top10's checks (plan_grasp prepares its own for the best grasp).
-        let object = args
-            .top10
+        // For --top10's and --dump-rescored's checks (plan_grasp prepares its own for the best
+        // grasp).
+        let object = (args.top10 || dump.is_some())
             .then(|| GraspObject::new(mesh.clone()))
             .transpose()
             .map_err(|e| e.to_string())?;
@@ -462,7 +462,7 @@ fn run(args: &Args) -> Result<(), String> {
                     None => "held".into(),
                     Some(stage) => format!("{stage:?}"),
                 });
-            let top10 = if let Some(object) = &object {
+            let top10 = if let Some(object) = object.as_ref().filter(|_| args.top10) {
                 let labels = check_grasps(
                     object,
                     &report.table_from_object,
@@ -486,22 +486,19 @@ fn run(args: &Args) -> Result<(), String> {
             } else {
                 String::new()
             };
-            if let Some(out) = dump.as_mut() {
+            if let (Some(out), Some(object)) = (dump.as_mut(), &object) {
                 let renderer = args.dump_recon.then_some(&renderer);
                 dump_rescored(
                     out,
                     [name, label],
-                    mesh,
+                    object,
                     &report,
                     (gripper, params),
                     renderer,
                 )?;
             }
             // The approach's angle from straight down.
-            let tilt_deg = (-best.grasp.approach().z)
-                .clamp(-1.0, 1.0)
-                .acos()
-                .to_degrees();
+            let tilt_deg = tilt_rad(&best.grasp).to_degrees();
             let bin = TILT_BINS_DEG.iter().take_while(|&&b| tilt_deg > b).count();
             tally.by_tilt[bin].0 += usize::from(held);
             tally.by_tilt[bin].1 += usize::from(settled);
@@ -616,7 +613,7 @@ fn print_table2(policies: &[Policy], tallies: &[Tally]) {
 fn dump_rescored(
     out: &mut impl std::io::Write,
     [name, label]: [&str; 2],
-    mesh: &TriangleMesh,
+    object: &GraspObject,
     report: &mvgrasp::planner::PlanReport,
     (gripper, params): (&mvgrasp::grasp::Gripper, &PlanParams),
     renderer: Option<&Renderer>,
@@ -630,15 +627,14 @@ fn dump_rescored(
     if rescored.is_empty() {
         return Ok(());
     }
-    let object = GraspObject::new(mesh.clone()).map_err(|e| e.to_string())?;
     // With a renderer: the same trial on the object as the fused views reconstruct it (what
     // the planner could try itself).
     let recon_trials = match renderer {
-        Some(renderer) => reconstruction_trials(renderer, &object, &rescored, gripper, params)?,
+        Some(renderer) => reconstruction_trials(renderer, object, &rescored, gripper, params)?,
         None => vec![None; rescored.len()],
     };
     let labels = check_grasps(
-        &object,
+        object,
         &report.table_from_object,
         &rescored,
         gripper,
@@ -646,7 +642,7 @@ fn dump_rescored(
     )
     .map_err(|e| e.to_string())?;
     for (rank, ((c, l), r)) in rescored.iter().zip(&labels).zip(&recon_trials).enumerate() {
-        let tilt_deg = (-c.grasp.approach().z).clamp(-1.0, 1.0).acos().to_degrees();
+        let tilt_deg = tilt_rad(&c.grasp).to_degrees();
         let line = serde_json::json!({
             "object": name,
             "policy": label,
@@ -668,7 +664,8 @@ fn dump_rescored(
         });
         writeln!(out, "{line}").map_err(|e| e.to_string())?;
     }
-    Ok(())
+    // Flushed here, so that a failed write is an error rather than lost when the writer drops.
+    out.flush().map_err(|e| e.to_string())
 }
 
 /// Each of `candidates` tried in physics on `object` as its fused views reconstruct it (`None`
