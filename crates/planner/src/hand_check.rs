@@ -229,7 +229,10 @@ fn box_meets_view(
     (v0..=v1).any(|v| {
         let row_direction = r.y_axis * ((v as f32 - k.cy) / k.fy) + r.z_axis;
         let start = v as usize * width;
-        let row = &data[start + u0 as usize..=start + u1 as usize];
+        // In the image whenever its intrinsics are valid; a row past it holds nothing.
+        let Some(row) = data.get(start + u0 as usize..=start + u1 as usize) else {
+            return false;
+        };
         row.iter().zip(&columns).any(|(&d, &column)| {
             let p = (column + row_direction) * d + t;
             d > 0.0 && p.x.abs() < half.x && p.y.abs() < half.y && p.z.abs() < half.z
