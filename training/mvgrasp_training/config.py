@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 if TYPE_CHECKING:
     from mvgrasp_training.lsm import LsmArchitecture
+    from mvgrasp_training.mvs import MvsArchitecture
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -41,6 +42,9 @@ __all__ = [
     "LsmModelConfig",
     "LsmTrainConfig",
     "ModelConfig",
+    "MvsDataConfig",
+    "MvsExperimentConfig",
+    "MvsModelConfig",
     "TrainConfig",
     "load_config",
     "parse_config",
@@ -231,6 +235,61 @@ class LsmExperimentConfig(_Validated):
     data: LsmDataConfig
     train: LsmTrainConfig
     model: LsmModelConfig = field(default_factory=LsmModelConfig)
+
+
+@dataclass(frozen=True)
+class MvsDataConfig(_Validated):
+    """The RGB-D dataset, its split and how inputs are drawn and disturbed."""
+
+    dataset_dir: Path
+    """A ``render`` output folder; relative paths are relative to the config file's folder."""
+    val_fraction: float = _checked(_FRACTION, default=0.1)
+    min_views: int = _checked((lambda v: v >= 2, ">= 2"), default=3)
+    max_views: int = _checked((lambda v: v >= 2, ">= 2"), default=5)
+    """Each batch draws its view count uniformly from ``min_views`` to ``max_views``."""
+    val_views: int = _checked((lambda v: v >= 2, ">= 2"), default=5)
+    object_weight: float = _checked(_NON_NEGATIVE, default=3.0)
+    """A pixel of the object weighs ``1 + object_weight`` in the loss, the others 1."""
+    colour_jitter: float = _checked(_FRACTION, default=0.1)
+    """Per view: gains and offsets of each colour channel drawn within this fraction."""
+    noise_std: float = _checked(_NON_NEGATIVE, default=0.01)
+    """Gaussian pixel noise (colours in [0, 1])."""
+    pose_noise_m: float = _checked(_NON_NEGATIVE, default=0.0015)
+    pose_noise_rad: float = _checked(_NON_NEGATIVE, default=0.0087)
+    """Calibration error: each camera given to the network is moved by up to these."""
+
+
+@dataclass(frozen=True)
+class MvsModelConfig(_Validated):
+    """The architecture's sizes (see :class:`MvsArchitecture`)."""
+
+    image_width: int = _checked((lambda v: v >= 8 and v % 8 == 0, "a multiple of 8"), default=256)
+    image_height: int = _checked((lambda v: v >= 8 and v % 8 == 0, "a multiple of 8"), default=192)
+    features: int = _checked(_AT_LEAST_ONE, default=8)
+    groups: int = _checked(_AT_LEAST_ONE, default=8)
+    coarse_planes: int = _checked((lambda v: v >= 2 and v % 2 == 0, "even and >= 2"), default=32)
+    fine_planes: int = _checked((lambda v: v >= 2 and v % 2 == 0, "even and >= 2"), default=8)
+    fine_step_m: float = _checked(_POSITIVE, default=0.004)
+    regulariser: int = _checked(_AT_LEAST_ONE, default=8)
+    workspace_half_side_m: float = _checked(_POSITIVE, default=0.2)
+    workspace_height_m: float = _checked(_POSITIVE, default=0.3)
+
+    def architecture(self) -> MvsArchitecture:
+        """The network's sizes (imports torch)."""
+        from mvgrasp_training.mvs import MvsArchitecture
+
+        return MvsArchitecture(**dataclasses.asdict(self))
+
+
+@dataclass(frozen=True)
+class MvsExperimentConfig(_Validated):
+    """One training run of the multi-view stereo network (the LSM's schedule keys)."""
+
+    name: str = _checked(_NOT_EMPTY)
+    seed: int = _checked(_NON_NEGATIVE)
+    data: MvsDataConfig
+    train: LsmTrainConfig
+    model: MvsModelConfig = field(default_factory=MvsModelConfig)
 
 
 def load_config(path: str | Path, cls: type[T] = ExperimentConfig) -> T:  # type: ignore[assignment]

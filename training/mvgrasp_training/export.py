@@ -16,6 +16,7 @@ from safetensors.torch import load_file, save_file
 from mvgrasp_training._files import read_format_json
 from mvgrasp_training.gqcnn import GQCNN
 from mvgrasp_training.lsm import LSM, LsmArchitecture
+from mvgrasp_training.mvs import MVS, MvsArchitecture
 
 FORMAT = "mvgrasp-gqcnn/1"
 
@@ -125,6 +126,46 @@ def load_lsm(path: str | Path) -> tuple[LSM, dict[str, Any]]:
     if description.get("format") != LSM_FORMAT:
         raise ValueError(f"{path}: format {description.get('format')!r}, expected {LSM_FORMAT!r}")
     net = LSM(LsmArchitecture(**description["architecture"]))
+    try:
+        net.load_state_dict(load_file(str(path.parent / description["weights"])))
+    except RuntimeError as e:
+        raise ValueError(f"{path}: weights do not fit the architecture: {e}") from e
+    return net.eval(), description
+
+
+MVS_FORMAT = "mvgrasp-mvs/1"
+
+
+def export_mvs(net: MVS, stem: str | Path, training: dict[str, Any] | None = None) -> Path:
+    """Writes the multi-view stereo network's ``stem.safetensors`` and ``stem.json`` (format,
+    architecture, tensor shapes, the training report) for the Rust runtime
+    (``mvgrasp_infer::Mvs``); returns the JSON's path."""
+    stem = Path(stem)
+    tensors, weights = _save_weights(net, stem)
+    description = {
+        "format": MVS_FORMAT,
+        "weights": weights.name,
+        "architecture": asdict(net.arch),
+        "tensors": {k: list(v.shape) for k, v in sorted(tensors.items())},
+        "training": training or {},
+    }
+    path = stem.with_suffix(".json")
+    path.write_text(json.dumps(description, indent=2) + "\n")
+    return path
+
+
+def load_mvs(path: str | Path) -> tuple[MVS, dict[str, Any]]:
+    """Reads a multi-view stereo export back into torch: the network (eval mode) and its
+    description.
+
+    Raises:
+        ValueError: the JSON is not such an export, or its weights do not fit the architecture.
+    """
+    path = Path(path)
+    description = json.loads(path.read_text())
+    if description.get("format") != MVS_FORMAT:
+        raise ValueError(f"{path}: format {description.get('format')!r}, expected {MVS_FORMAT!r}")
+    net = MVS(MvsArchitecture(**description["architecture"]))
     try:
         net.load_state_dict(load_file(str(path.parent / description["weights"])))
     except RuntimeError as e:

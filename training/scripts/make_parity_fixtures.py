@@ -16,6 +16,14 @@
    of each op the LSM adds to the runtime (3-D convolution, transposed convolution, instance
    norm, the convolutional GRU cell, unprojection, ray projection, bilinear and area resizing).
    All computed in float64, stored as float32.
+4. crates/infer/tests/fixtures/: for a tiny multi-view stereo network (the shipped one's layers,
+   fewer channels and planes, seeded random weights) mvs_tiny.json + .safetensors (as
+   `export_mvs` writes them) and mvs_tiny.io.safetensors: 3 RGB views of random colours, their
+   cameras on a hemisphere, torch's depth, confidence and both stages' depths, and the inputs and
+   outputs of its geometry (the workspace's depth range, the hypotheses, one correlation
+   volume). Computed in float64, stored as float32.
+
+``--only mvs`` writes the fourth part alone (the others stay as they are).
 """
 
 from __future__ import annotations
@@ -27,7 +35,7 @@ import torch
 from safetensors.torch import save_file
 from torch.nn import functional as F
 
-from mvgrasp_training.export import export_gqcnn, export_lsm, load_gqcnn
+from mvgrasp_training.export import export_gqcnn, export_lsm, export_mvs, load_gqcnn
 from mvgrasp_training.gqcnn import GQCNN, Architecture, ConvSpec
 from mvgrasp_training.lsm import (
     LSM,
@@ -218,7 +226,73 @@ def lsm_fixtures() -> None:
     print(f"wrote lsm_ops: {len(ops)} tensors")
 
 
+def mvs_fixtures() -> None:
+    from mvgrasp_training.mvs import (
+        MVS,
+        MvsArchitecture,
+        correlation_volume,
+        depth_range,
+        inverse_depth_planes,
+    )
+
+    gen = torch.Generator().manual_seed(11)
+    torch.manual_seed(11)
+    arch = MvsArchitecture(
+        image_width=32,
+        image_height=24,
+        features=4,
+        groups=2,
+        coarse_planes=8,
+        fine_planes=4,
+        fine_step_m=0.004,
+        regulariser=4,
+    )
+    net = MVS(arch)
+    export_mvs(net, OUT / "mvs_tiny", {"purpose": "parity fixture, random weights"})
+    views = 3
+    k, pose = hemisphere_cameras(views, arch.image_width, arch.image_height, gen)
+    images = torch.rand(
+        1, views, 3, arch.image_height, arch.image_width, generator=gen, dtype=torch.float64
+    )
+    io: dict[str, torch.Tensor] = {}
+    with torch.no_grad():
+        out = net.double()(images, k[None], pose[None])
+        io |= {
+            "images": images[0],
+            "k": k,
+            "camera_from_world": pose,
+            "depth": out.depth[0],
+            "confidence": out.confidence[0],
+            "coarse": out.coarse[0],
+            "fine": out.fine[0],
+        }
+        centre = grid_centre(pose[None])
+        near, far = depth_range(k[1:2], pose[1:2], centre, arch, 24, 32)
+        planes = inverse_depth_planes(near, far, 6)
+        features = torch.randn(1, views, 4, 24, 32, generator=gen, dtype=torch.float64)
+        volume = correlation_volume(features, k[None], pose[None], 1, planes, 2)
+        io |= {
+            "range.centre": centre[0],
+            "range.near": near[0],
+            "range.far": far[0],
+            "planes": planes[0],
+            "volume.features": features[0],
+            "volume.y": volume[0],
+        }
+    save_file(
+        {key: value.float().contiguous() for key, value in io.items()},
+        str(OUT / "mvs_tiny.io.safetensors"),
+    )
+    print(f"wrote mvs_tiny: depth {out.depth.min().item():.4f}..{out.depth.max().item():.4f} m")
+
+
 def main() -> None:
+    import sys
+
+    if sys.argv[1:] == ["--only", "mvs"]:
+        mvs_fixtures()
+        return
+    mvs_fixtures()
     lsm_fixtures()
     OUT.mkdir(parents=True, exist_ok=True)
     for pose_inputs in (1, 2):

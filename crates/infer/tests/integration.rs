@@ -7,3 +7,4 @@ mod common;
 mod gqcnn_parity;
 mod gqcnn_shaped_forward;
 mod lsm_parity;
+mod mvs_parity;

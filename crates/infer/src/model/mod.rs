@@ -4,6 +4,7 @@ pub mod description;
 pub mod gqcnn;
 mod image_stream;
 pub mod lsm;
+pub mod mvs;
 pub mod weights;
 
 pub use description::{
@@ -11,4 +12,5 @@ pub use description::{
 };
 pub use gqcnn::{Gqcnn, GqcnnWorkspace};
 pub use lsm::{LSM_FORMAT, Lsm, LsmArchitecture, LsmDescription};
+pub use mvs::{MVS_FORMAT, Mvs, MvsArchitecture, MvsDepth, MvsDescription};
 pub use weights::Weights;

@@ -17,6 +17,7 @@ mod gates;
 mod instance_norm;
 mod linear;
 mod local_response_norm;
+pub mod plane_sweep;
 mod pool2d;
 mod relu;
 mod resize;
