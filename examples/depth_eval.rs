@@ -15,8 +15,10 @@
 //! normalised error (here: the mean absolute error divided by the mean true depth of the object
 //! pixels, so 0.0035 is 1.75 mm at 0.5 m), and the prediction's time for the N views.
 //! Methods: the Learnt Stereo Machine (the shipped `models/lsm_small`, `lsm::lsm_depths`), the
-//! plane sweep inside the visual hull (`stereo::sweep_depths`) and the visual hull alone (its
-//! nearest surface; timed with the sweep, which makes it). The LSM's threads: rayon's pool
+//! plane sweep inside the visual hull (`stereo::sweep_depths`), the visual hull alone (its
+//! nearest surface; timed with the sweep, which makes it) and the learned multi-view stereo
+//! network (the shipped `models/mvs_small`, `mvs::mvs_depths`, every pixel kept whatever its
+//! confidence). Each row also gives the median error of the predicted pixels. The LSM's threads: rayon's pool
 //! (`RAYON_NUM_THREADS`), as the baseline's.
 
 use std::process::ExitCode;
@@ -27,6 +29,7 @@ use mvgrasp::geometry::objects::{Category, generate};
 use mvgrasp::geometry::{HemisphereLayout, Intrinsics, IntrinsicsPreset, RestingPoses};
 use mvgrasp::infer::Parallelism;
 use mvgrasp::lsm::lsm_depths;
+use mvgrasp::mvs::mvs_depths;
 use mvgrasp::planner::{DepthPredictor, RgbInput, models, render_rgb};
 use mvgrasp::render::{Backend, Renderer};
 use mvgrasp::stereo::{RgbView, SweepParams, sweep_depths};
@@ -52,7 +55,7 @@ struct Args {
 }
 
 /// Sums over object pixels.
-#[derive(Default, Clone, Copy)]
+#[derive(Clone, Copy)]
 struct Errors {
     object_pixels: usize,
     predicted: usize,
@@ -60,6 +63,24 @@ struct Errors {
     true_depth_m: f64,
     within_2mm: usize,
     within_5mm: usize,
+    /// Predicted pixels by error, 0.1 mm bins (the last: 200 mm and more), for the median.
+    histogram: [u32; HISTOGRAM_BINS],
+}
+
+const HISTOGRAM_BINS: usize = 2001;
+
+impl Default for Errors {
+    fn default() -> Self {
+        Self {
+            object_pixels: 0,
+            predicted: 0,
+            abs_error_m: 0.0,
+            true_depth_m: 0.0,
+            within_2mm: 0,
+            within_5mm: 0,
+            histogram: [0; HISTOGRAM_BINS],
+        }
+    }
 }
 
 impl Errors {
@@ -76,8 +97,22 @@ impl Errors {
                 self.abs_error_m += e;
                 self.within_2mm += usize::from(e <= 2e-3);
                 self.within_5mm += usize::from(e <= 5e-3);
+                self.histogram[((e * 1e4) as usize).min(HISTOGRAM_BINS - 1)] += 1;
             }
         }
+    }
+
+    /// The median error of the predicted pixels, millimetres (to 0.1 mm).
+    fn median_mm(&self) -> f64 {
+        let half = self.predicted.div_ceil(2) as u64;
+        let mut seen = 0u64;
+        for (bin, &count) in self.histogram.iter().enumerate() {
+            seen += u64::from(count);
+            if seen >= half && count > 0 {
+                return (bin as f64 + 0.5) * 0.1;
+            }
+        }
+        f64::NAN
     }
 
     fn row(&self) -> String {
@@ -85,7 +120,8 @@ impl Errors {
         let mae = self.abs_error_m / self.predicted.max(1) as f64;
         let mean_depth = self.true_depth_m / n;
         format!(
-            "{:.2} | {:.0}% | {:.0}% | {:.0}% | {:.4}",
+            "{:.1} | {:.2} | {:.0}% | {:.0}% | {:.0}% | {:.4}",
+            self.median_mm(),
             1e3 * mae,
             100.0 * self.predicted as f64 / n,
             100.0 * self.within_2mm as f64 / n,
@@ -111,6 +147,10 @@ fn run(args: &Args) -> Result<(), String> {
         .load()
         .map_err(|e| e.to_string())?
         .with_parallelism(Parallelism::all_threads());
+    let mvs = models::MVS
+        .load()
+        .map_err(|e| e.to_string())?
+        .with_parallelism(Parallelism::all_threads());
     let counts = &args.views;
     if let Some(n) = counts.iter().find(|n| !(1..=10).contains(*n)) {
         return Err(format!(
@@ -127,10 +167,12 @@ fn run(args: &Args) -> Result<(), String> {
         radius_m: args.distance_m,
         ..HemisphereLayout::paper_test()
     };
-    // [n][method][top-down, all views]; method 0 LSM, 1 sweep, 2 hull.
-    let mut tallies = vec![[[Errors::default(); 2]; 3]; counts.len()];
-    // [n][LSM, baseline]
-    let mut seconds = vec![[0.0f64; 2]; counts.len()];
+    // [n][method][top-down, all views]; method 0 LSM, 1 sweep, 2 hull, 3 MVS.
+    let mut tallies = vec![[[Errors::default(); 2]; 4]; counts.len()];
+    // [n][LSM, baseline, hull (the baseline's), MVS]
+    let mut seconds = vec![[0.0f64; 4]; counts.len()];
+    // [n][confidence decile]: the MVS network's object pixels (all views) and those within 5 mm.
+    let mut reliability = vec![[[0usize; 2]; 10]; counts.len()];
     let mut objects = 0;
     for category in Category::ALL {
         for index in 30..30 + args.per_category {
@@ -169,13 +211,32 @@ fn run(args: &Args) -> Result<(), String> {
                     Vec::new()
                 };
                 seconds[c][1] += started.elapsed().as_secs_f64();
+                seconds[c][2] = seconds[c][1];
+                let started = Instant::now();
+                let stereo = if n >= 2 {
+                    mvs_depths(&mvs, &views, 0.0).map_err(|e| e.to_string())?
+                } else {
+                    Vec::new()
+                };
+                seconds[c][3] += started.elapsed().as_secs_f64();
                 for (i, (lsm, (view, truth))) in learnt.iter().zip(&rendered).enumerate() {
                     let mask = view.mask.as_deref().unwrap_or(&[]);
-                    let mut methods = vec![lsm];
+                    let mut methods = vec![(0, lsm)];
                     if let Some(swept) = depths.get(i) {
-                        methods.extend([&swept.depth_m, &swept.hull_m]);
+                        methods.extend([(1, &swept.depth_m), (2, &swept.hull_m)]);
                     }
-                    for (m, predicted) in methods.into_iter().enumerate() {
+                    if let Some(predicted) = stereo.get(i) {
+                        methods.push((3, &predicted.depth_m));
+                        let pixels = predicted.depth_m.iter().zip(&predicted.confidence);
+                        for (((&d, &confidence), &t), &m) in pixels.zip(truth).zip(mask) {
+                            if m && t > 0.0 {
+                                let decile = ((confidence * 10.0) as usize).min(9);
+                                reliability[c][decile][0] += 1;
+                                reliability[c][decile][1] += usize::from((d - t).abs() <= 5e-3);
+                            }
+                        }
+                    }
+                    for (m, predicted) in methods {
                         if i == 0 {
                             tallies[c][m][0].add(predicted, truth, mask);
                         }
@@ -194,14 +255,15 @@ fn run(args: &Args) -> Result<(), String> {
         if args.per_face { "triangle" } else { "vertex" }
     );
     println!(
-        "| method | input views | views scored | MAE (mm) | predicted | within 2 mm | within 5 mm | normalised | time (s) |"
+        "| method | input views | views scored | median (mm) | MAE (mm) | predicted | within 2 mm | within 5 mm | normalised | time (s) |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     for (c, &n) in counts.iter().enumerate() {
         let methods = [
             "LSM (lsm_small)",
             "plane sweep in the hull",
             "visual hull alone",
+            "MVS (mvs_small)",
         ];
         for (m, method) in methods.iter().enumerate() {
             if n < 2 && m > 0 {
@@ -211,7 +273,22 @@ fn run(args: &Args) -> Result<(), String> {
                 println!(
                     "| {method} | {n} | {scored} | {} | {:.2} |",
                     tallies[c][m][s].row(),
-                    seconds[c][m.min(1)] / objects as f64
+                    seconds[c][m] / objects as f64
+                );
+            }
+        }
+    }
+    println!("\nMVS confidence against error (object pixels of all views): the share within 5 mm");
+    println!("| input views | confidence | pixels | within 5 mm |");
+    println!("|---|---|---|---|");
+    for (c, &n) in counts.iter().enumerate() {
+        for (decile, [pixels, good]) in reliability[c].iter().enumerate() {
+            if *pixels > 0 {
+                println!(
+                    "| {n} | {:.1}-{:.1} | {pixels} | {:.0}% |",
+                    decile as f64 / 10.0,
+                    (decile + 1) as f64 / 10.0,
+                    100.0 * *good as f64 / *pixels as f64
                 );
             }
         }

@@ -199,10 +199,15 @@ fn policies(args: &Args) -> Result<Vec<Policy>, String> {
                         Some(DepthFrom::Lsm)
                     } else if name.starts_with("rgb-") {
                         Some(DepthFrom::Baseline)
+                    } else if name.starts_with("mvs-") {
+                        Some(DepthFrom::Mvs)
                     } else {
                         None
                     };
-                    let rest = name.trim_start_matches("rgb-").trim_start_matches("lsm-");
+                    let rest = name
+                        .trim_start_matches("rgb-")
+                        .trim_start_matches("lsm-")
+                        .trim_start_matches("mvs-");
                     // topdown-N: the top-down GQ-CNN in the first (top-down) of N RGB views.
                     let top_down = rgb.is_some() && rest.starts_with("topdown-");
                     let views = rest
@@ -212,14 +217,15 @@ fn policies(args: &Args) -> Result<Vec<Policy>, String> {
                         .ok_or_else(|| {
                             format!(
                                 "--policy {name}: expected topdown, per-view, fused-N, \
-                                 lsm-fused-N, rgb-fused-N, lsm-topdown-N or rgb-topdown-N \
-                                 (N views)"
+                                 lsm-fused-N, rgb-fused-N, mvs-fused-N, lsm-topdown-N, \
+                                 rgb-topdown-N or mvs-topdown-N (N views)"
                             )
                         })?;
                     let kind = if top_down { "top-down GQ-CNN" } else { "fused" };
                     Policy {
                         label: match rgb {
                             Some(DepthFrom::Lsm) => format!("{kind}, {views} RGB views, LSM"),
+                            Some(DepthFrom::Mvs) => format!("{kind}, {views} RGB views, MVS"),
                             Some(DepthFrom::Baseline) => {
                                 format!("{kind}, {views} RGB views, baseline")
                             }

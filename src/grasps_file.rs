@@ -307,3 +307,138 @@ pub fn write_overlay(
     }
     write_png8(path, depth.width(), depth.height(), 3, &rgb)
 }
+
+/// The picture of a plan from RGB views (`plan --out`: `views.png`): one column per view, its
+/// colour image above its depth (grey, near bright, missing black; the predicted depth for RGB
+/// input), both at half resolution, and the best five grasps drawn in every view where they
+/// project: the line between the contacts and each finger 3 cm back along the approach, in
+/// [`GRASP_COLORS`] (the best green, drawn last and thicker).
+///
+/// # Errors
+/// [`Error::Io`] when the PNG cannot be written; [`Error::Stereo`] for views of other sizes or
+/// a colour image missing for a depth view.
+pub fn write_contact_sheet(
+    path: &Path,
+    rgb: &[crate::stereo::RgbView],
+    views: &[mvgrasp_planner::View],
+    grasps: &[ScoredGrasp],
+) -> Result<()> {
+    let Some(first) = views.first() else {
+        return Err(Error::Stereo {
+            problem: format!("{}: no view to draw", path.display()),
+        });
+    };
+    let k = first.camera.intrinsics;
+    let (w, h) = (k.width as usize, k.height as usize);
+    let same = |c: &Camera| (c.intrinsics.width, c.intrinsics.height) == (k.width, k.height);
+    if rgb.len() != views.len()
+        || !views.iter().all(|v| same(&v.camera))
+        || !rgb.iter().all(|v| same(&v.camera))
+    {
+        return Err(Error::Stereo {
+            problem: format!(
+                "{}: {} colour images for {} views, all of one size expected",
+                path.display(),
+                rgb.len(),
+                views.len()
+            ),
+        });
+    }
+    let (tw, th) = (w / 2, h / 2);
+    let (sheet_w, sheet_h) = (tw * views.len(), 2 * th);
+    let mut sheet = vec![0u8; 3 * sheet_w * sheet_h];
+    for (col, (colour, view)) in rgb.iter().zip(views).enumerate() {
+        let depth = view.depth.as_slice();
+        let (near, far) = depth_span(depth);
+        for y in 0..th {
+            for x in 0..tw {
+                let at = (2 * y) * w + 2 * x;
+                let top = 3 * (y * sheet_w + col * tw + x);
+                sheet[top..top + 3].copy_from_slice(&colour.rgb[at]);
+                let d = depth[at];
+                let g = if d > 0.0 {
+                    (40.0 + 200.0 * (1.0 - ((d - near) / (far - near)).clamp(0.0, 1.0))) as u8
+                } else {
+                    0
+                };
+                let bottom = 3 * ((th + y) * sheet_w + col * tw + x);
+                sheet[bottom..bottom + 3].copy_from_slice(&[g, g, g]);
+            }
+        }
+        for (rank, scored) in grasps.iter().enumerate().take(GRASP_COLORS.len()).rev() {
+            let g = &scored.grasp;
+            let half = g.closing_axis() * (g.width_m / 2.0);
+            let back = g.approach() * -0.03;
+            let tips = [g.center() - half, g.center() + half];
+            let mut segments = vec![(tips[0], tips[1])];
+            segments.extend(tips.iter().map(|&t| (t, t + back)));
+            for row in 0..2 {
+                for &(a, b) in &segments {
+                    let (Some(a), Some(b)) = (view.camera.project(a), view.camera.project(b))
+                    else {
+                        continue;
+                    };
+                    let offset = [(col * tw) as f32, (row * th) as f32];
+                    draw_line(
+                        &mut sheet,
+                        sheet_w,
+                        [col * tw, row * th, tw, th],
+                        [a[0] / 2.0 + offset[0], a[1] / 2.0 + offset[1]],
+                        [b[0] / 2.0 + offset[0], b[1] / 2.0 + offset[1]],
+                        GRASP_COLORS[rank],
+                        rank == 0,
+                    );
+                }
+            }
+        }
+    }
+    write_png8(path, sheet_w as u32, sheet_h as u32, 3, &sheet)
+}
+
+/// The 2nd and 98th percentiles of the positive depths (the grey scale's ends).
+fn depth_span(depth: &[f32]) -> (f32, f32) {
+    let mut valid: Vec<f32> = depth.iter().copied().filter(|&d| d > 0.0).collect();
+    valid.sort_by(f32::total_cmp);
+    let at = |q: f64| {
+        valid
+            .get(((valid.len().saturating_sub(1)) as f64 * q) as usize)
+            .copied()
+    };
+    let (near, far) = (at(0.02).unwrap_or(0.0), at(0.98).unwrap_or(1.0));
+    (near, far.max(near + 1e-3))
+}
+
+/// A line from `a` to `b` (sheet pixels) in `color`, clipped to the tile `[x, y, w, h]`.
+fn draw_line(
+    sheet: &mut [u8],
+    sheet_w: usize,
+    tile: [usize; 4],
+    a: [f32; 2],
+    b: [f32; 2],
+    color: [u8; 3],
+    thick: bool,
+) {
+    let [tx, ty, tw, th] = tile.map(|v| v as i64);
+    let steps = (b[0] - a[0])
+        .abs()
+        .max((b[1] - a[1]).abs())
+        .ceil()
+        .clamp(1.0, 4096.0) as usize;
+    let r = i64::from(thick);
+    for s in 0..=steps {
+        let t = s as f32 / steps as f32;
+        let (x, y) = (
+            (a[0] + (b[0] - a[0]) * t).round() as i64,
+            (a[1] + (b[1] - a[1]) * t).round() as i64,
+        );
+        for dy in -r..=r {
+            for dx in -r..=r {
+                let (u, v) = (x + dx, y + dy);
+                if (tx..tx + tw).contains(&u) && (ty..ty + th).contains(&v) {
+                    let i = 3 * (v as usize * sheet_w + u as usize);
+                    sheet[i..i + 3].copy_from_slice(&color);
+                }
+            }
+        }
+    }
+}

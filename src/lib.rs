@@ -17,6 +17,7 @@ pub mod grasp_image;
 pub mod grasps_file;
 pub mod lsm;
 pub mod mcap_log;
+pub mod mvs;
 pub mod planner;
 pub mod report;
 pub mod sensor_files;

@@ -38,7 +38,26 @@ pub fn lsm_depths(lsm: &Lsm, views: &[RgbView]) -> Result<Vec<Vec<f32>>> {
     }
     let arch = lsm.architecture();
     let (aw, ah) = (arch.image_width, arch.image_height);
-    let mut images = Vec::with_capacity(views.len() * 3 * aw * ah);
+    let (images, cameras) = network_inputs(views, aw, ah)?;
+    let predicted = match views {
+        [view] => lsm.predict_in(&images, &cameras, single_view_centre(view)?)?,
+        _ => lsm.predict(&images, &cameras)?,
+    };
+    at_camera_resolution(views, predicted.data(), aw, ah)
+}
+
+/// The networks' inputs of RGB views: colours to `[0, 1]`, each image area-averaged to
+/// `width` x `height` (`[V, 3, height, width]`), and the cameras with their intrinsics scaled to
+/// match, posed in the table frame.
+///
+/// # Errors
+/// Only for views whose images do not fill their cameras' sizes (the readers check that).
+pub(crate) fn network_inputs(
+    views: &[RgbView],
+    width: usize,
+    height: usize,
+) -> Result<(Tensor, Vec<CameraMatrices>)> {
+    let mut images = Vec::with_capacity(views.len() * 3 * width * height);
     let mut cameras = Vec::with_capacity(views.len());
     for view in views {
         let k = &view.camera.intrinsics;
@@ -49,26 +68,38 @@ pub fn lsm_depths(lsm: &Lsm, views: &[RgbView]) -> Result<Vec<Vec<f32>>> {
                 planes[c * w * h + i] = f32::from(value) / 255.0;
             }
         }
-        let image = resize_area(&Tensor::new(&[1, 3, h, w], planes)?, ah, aw)?;
+        let image = resize_area(&Tensor::new(&[1, 3, h, w], planes)?, height, width)?;
         images.extend_from_slice(image.data());
         cameras.push(camera_matrices(
             view,
-            aw as f32 / w as f32,
-            ah as f32 / h as f32,
+            width as f32 / w as f32,
+            height as f32 / h as f32,
         ));
     }
-    let images = Tensor::new(&[views.len(), 3, ah, aw], images)?;
-    let predicted = match views {
-        [view] => lsm.predict_in(&images, &cameras, single_view_centre(view)?)?,
-        _ => lsm.predict(&images, &cameras)?,
-    };
+    Ok((
+        Tensor::new(&[views.len(), 3, height, width], images)?,
+        cameras,
+    ))
+}
+
+/// A network's per-view maps (`[V, height, width]` in `maps`) resized bilinearly to each
+/// view's camera; with a mask, the pixels off the object get the table plane's depth.
+///
+/// # Errors
+/// Only for maps that do not hold V views of `width` x `height`.
+pub(crate) fn at_camera_resolution(
+    views: &[RgbView],
+    maps: &[f32],
+    width: usize,
+    height: usize,
+) -> Result<Vec<Vec<f32>>> {
     views
         .iter()
-        .zip(predicted.data().chunks_exact(aw * ah))
+        .zip(maps.chunks_exact(width * height))
         .map(|(view, depth)| {
             let k = &view.camera.intrinsics;
             let (w, h) = (k.width as usize, k.height as usize);
-            let small = Tensor::new(&[1, 1, ah, aw], depth.to_vec())?;
+            let small = Tensor::new(&[1, 1, height, width], depth.to_vec())?;
             let mut depth = resize_bilinear(&small, h, w)?.into_data();
             if let Some(mask) = &view.mask {
                 let table = table_depth(&view.camera);

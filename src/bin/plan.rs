@@ -20,7 +20,7 @@ use std::process::ExitCode;
 use clap::Parser;
 use mvgrasp::cli::ObjectArgs;
 use mvgrasp::geometry::{Intrinsics, IntrinsicsPreset};
-use mvgrasp::grasps_file::{GraspsFile, write_overlay};
+use mvgrasp::grasps_file::{GraspsFile, write_contact_sheet, write_overlay};
 use mvgrasp::infer::Gqcnn;
 use mvgrasp::mcap_log::write_plan_log;
 use mvgrasp::planner::{
@@ -236,7 +236,17 @@ fn run(args: &Args) -> Result<bool, String> {
         }
     }
     if let Some(out) = &args.out {
-        write_outputs(out, &GraspsFile::of_rendered(&plan), &[], &[])?;
+        write_outputs(
+            out,
+            &GraspsFile::of_rendered(&plan),
+            &plan.scene_views,
+            &plan.top,
+        )?;
+        if !plan.rgb_views.is_empty() {
+            let picture = out.join("views.png");
+            write_contact_sheet(&picture, &plan.rgb_views, &plan.scene_views, &plan.top)
+                .map_err(|e| e.to_string())?;
+        }
     }
     Ok(plan.best.is_some())
 }
@@ -267,6 +277,7 @@ fn write_outputs(
 /// How a summary names a depth predictor.
 fn depth_from_words(from: DepthFrom) -> &'static str {
     match from {
+        DepthFrom::Mvs => "the multi-view stereo network (models/mvs_small)",
         DepthFrom::Lsm => "the Learnt Stereo Machine (models/lsm_small)",
         DepthFrom::Baseline => "the plane-sweep baseline",
     }

@@ -147,6 +147,13 @@ pub struct PlanReport {
     /// Wall-clock times (not in the JSON, which is the same bytes for the same seed).
     #[serde(skip)]
     pub timings: PlanTimings,
+    /// The views planned on, with their (rendered or predicted) depth (not in the JSON).
+    #[serde(skip)]
+    pub scene_views: Vec<View>,
+    /// The colour views the depth was predicted from; none for rendered depth (not in the
+    /// JSON).
+    #[serde(skip)]
+    pub rgb_views: Vec<RgbView>,
 }
 
 /// Seconds spent in each stage of [`plan_grasp`].
@@ -179,6 +186,8 @@ pub struct Scene {
     pub views: Vec<View>,
     /// Seconds spent predicting the views' depth from RGB (0 for rendered depth).
     pub depth_s: f64,
+    /// The colour views the depth was predicted from (none for rendered depth).
+    pub rgb: Vec<RgbView>,
 }
 
 /// Rests `object` on the table in the offered pose `params.stable_pose` and renders the depth
@@ -201,6 +210,7 @@ pub fn render_scene(
         .cameras(params.intrinsics, target, params.seed)?;
     cameras.truncate(params.max_views.max(1));
     let mut depth_s = 0.0;
+    let mut colour = Vec::new();
     let views = match &params.depth_from_rgb {
         None => render_depths(renderer, mesh, &table_from_object, &cameras)?
             .into_iter()
@@ -223,6 +233,7 @@ pub fn render_scene(
             let started = Instant::now();
             let predicted = predict_views(&views, &rgb.depth)?;
             depth_s = started.elapsed().as_secs_f64();
+            colour = views;
             predicted
         }
     };
@@ -232,6 +243,7 @@ pub fn render_scene(
         table_from_object,
         views,
         depth_s,
+        rgb: colour,
     })
 }
 
@@ -407,6 +419,8 @@ pub fn plan_grasp(
             plan_s,
             check_s,
         },
+        scene_views: scene.views,
+        rgb_views: scene.rgb,
     })
 }
 

@@ -4,6 +4,7 @@
 //! A folder holds `cameras.json` (the cameras, posed in the table frame, as `render` writes
 //! them) and per camera `NNN_rgb.png` (8-bit RGB), optionally `NNN_mask.png` (the object's
 //! pixels; a `render` dataset's `train` or `test` folder is one). Depth comes from the
+//! learned multi-view stereo network ([`crate::mvs`], the shipped `models/mvs_small`), the
 //! Learnt Stereo Machine ([`crate::lsm`], the shipped `models/lsm_small`) or the classical
 //! baseline ([`crate::stereo`]): a [`DepthPredictor`].
 
@@ -11,11 +12,12 @@ use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
-use mvgrasp_infer::{Lsm, Parallelism};
+use mvgrasp_infer::{Lsm, Mvs, Parallelism};
 use mvgrasp_planner::{DepthImage, GqcnnPolicy, Mask, View, models};
 
 use crate::error::{Error, Result};
 use crate::lsm::lsm_depths;
+use crate::mvs::mvs_depths;
 use crate::planner::sensor::{mismatch, read_cameras_json, render_conventions};
 use crate::planner::{SensorPlanParams, ViewsPlanReport, plan_on_views};
 use crate::sensor_files::{read_mask_of, read_rgb};
@@ -106,6 +108,8 @@ pub fn predict_views(rgb: &[RgbView], predictor: &DepthPredictor) -> Result<Vec<
 /// Which depth predictor (`plan --depth-from`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum DepthFrom {
+    /// The learned multi-view stereo network, the shipped weights ([`crate::mvs`]).
+    Mvs,
     /// The Learnt Stereo Machine, the shipped weights ([`crate::lsm`]).
     Lsm,
     /// The classical baseline: silhouette carving and a plane sweep ([`crate::stereo`]).
@@ -117,9 +121,10 @@ impl std::str::FromStr for DepthFrom {
 
     fn from_str(name: &str) -> std::result::Result<Self, String> {
         match name {
+            "mvs" => Ok(Self::Mvs),
             "lsm" => Ok(Self::Lsm),
             "baseline" => Ok(Self::Baseline),
-            other => Err(format!("{other:?}, expected lsm or baseline")),
+            other => Err(format!("{other:?}, expected mvs, lsm or baseline")),
         }
     }
 }
@@ -128,20 +133,32 @@ impl DepthFrom {
     /// Its name on the command line and in summaries.
     pub fn name(self) -> &'static str {
         match self {
+            Self::Mvs => "mvs",
             Self::Lsm => "lsm",
             Self::Baseline => "baseline",
         }
     }
 }
 
-/// A depth predictor, ready to run: the baseline's settings or a loaded LSM.
+/// A depth predictor, ready to run: the baseline's settings or a loaded network.
 #[derive(Clone, Debug)]
 pub enum DepthPredictor {
     /// The classical baseline with these settings.
     Baseline(SweepParams),
     /// A Learnt Stereo Machine.
     Lsm(Arc<Lsm>),
+    /// A multi-view stereo network; its pixels of lower confidence are left missing.
+    Mvs {
+        /// The network.
+        net: Arc<Mvs>,
+        /// Pixels whose confidence is below this are left missing (0).
+        min_confidence: f32,
+    },
 }
+
+/// The shipped multi-view stereo network's confidence threshold: pixels below it are left
+/// missing (unseen space for the planner).
+pub const MVS_MIN_CONFIDENCE: f32 = 0.0;
 
 impl PartialEq for DepthPredictor {
     /// The same baseline settings, or the same loaded network.
@@ -149,6 +166,16 @@ impl PartialEq for DepthPredictor {
         match (self, other) {
             (Self::Baseline(a), Self::Baseline(b)) => a == b,
             (Self::Lsm(a), Self::Lsm(b)) => Arc::ptr_eq(a, b),
+            (
+                Self::Mvs {
+                    net: a,
+                    min_confidence: x,
+                },
+                Self::Mvs {
+                    net: b,
+                    min_confidence: y,
+                },
+            ) => Arc::ptr_eq(a, b) && x == y,
             _ => false,
         }
     }
@@ -168,6 +195,14 @@ impl DepthPredictor {
                     .load()?
                     .with_parallelism(Parallelism::all_threads()),
             )),
+            DepthFrom::Mvs => Self::Mvs {
+                net: Arc::new(
+                    models::MVS
+                        .load()?
+                        .with_parallelism(Parallelism::all_threads()),
+                ),
+                min_confidence: MVS_MIN_CONFIDENCE,
+            },
         })
     }
 
@@ -176,6 +211,7 @@ impl DepthPredictor {
         match self {
             Self::Baseline(_) => DepthFrom::Baseline,
             Self::Lsm(_) => DepthFrom::Lsm,
+            Self::Mvs { .. } => DepthFrom::Mvs,
         }
     }
 
@@ -190,6 +226,13 @@ impl DepthPredictor {
                 .map(|d| d.depth_m)
                 .collect()),
             Self::Lsm(lsm) => lsm_depths(lsm, views),
+            Self::Mvs {
+                net,
+                min_confidence,
+            } => Ok(mvs_depths(net, views, *min_confidence)?
+                .into_iter()
+                .map(|view| view.depth_m)
+                .collect()),
         }
     }
 }

@@ -208,9 +208,9 @@ def train(config: MvsExperimentConfig, out: Path, log=print) -> dict[str, float]
             # Two reference views a sample (the first, top-down in a test split, and one
             # other): the cost of every view as a reference, for a little less signal.
             refs = [0, int(epoch_rng.integers(1, views))]
-            out = net(given_rgb, k, given_pose, refs)
+            predicted = net(given_rgb, k, given_pose, refs)
             loss = loss_of(
-                out,
+                predicted,
                 depth[:, refs],
                 mask[:, refs],
                 k[:, refs],

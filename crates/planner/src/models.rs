@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use mvgrasp_infer::{Gqcnn, Lsm};
+use mvgrasp_infer::{Gqcnn, Lsm, Mvs};
 
 use crate::error::Result;
 
@@ -110,4 +110,32 @@ pub const LSM: ShippedLsm = ShippedLsm {
     name: "lsm_small",
     description: include_str!("../../../models/lsm_small.json"),
     weights: include_bytes!("../../../models/lsm_small.safetensors"),
+};
+
+/// A shipped multi-view stereo network: its name and files.
+#[derive(Clone, Copy, Debug)]
+pub struct ShippedMvs {
+    /// The experiment's name (`training/configs/NAME.toml`).
+    pub name: &'static str,
+    description: &'static str,
+    weights: &'static [u8],
+}
+
+impl ShippedMvs {
+    /// The network, ready to predict depth.
+    ///
+    /// # Errors
+    /// Only if the shipped files are broken (a test loads them).
+    pub fn load(&self) -> Result<Mvs> {
+        let path = Path::new("models").join(format!("{}.json", self.name));
+        Ok(Mvs::from_bytes(self.description, self.weights, &path)?)
+    }
+}
+
+/// The learned multi-view stereo network trained on the built-in objects' RGB-D dataset
+/// (`training/configs/mvs_small.toml`): depth and confidence from two or more RGB views.
+pub const MVS: ShippedMvs = ShippedMvs {
+    name: "mvs_small",
+    description: include_str!("../../../models/mvs_small.json"),
+    weights: include_bytes!("../../../models/mvs_small.safetensors"),
 };
