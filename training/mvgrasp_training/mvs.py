@@ -13,8 +13,9 @@ Every view is a reference view in turn; the others are its sources.
    ``workspace_height_m`` above it. ``coarse_planes`` depths, uniform in inverse depth, span
    that stretch of each ray. Each source's features are sampled (bilinear, zero outside the
    image or behind the camera, never clamped) where the hypothesis' 3-D point falls, and
-   compared with the reference's by group-wise correlation (the mean product over each of
-   ``groups`` groups of channels), averaged over the sources that see the point.
+   compared with the reference's by group-wise correlation (the features are unit vectors; the
+   mean product over each of ``groups`` groups of channels), averaged over the sources that see
+   the point and, for occlusions, its maximum over them.
 3. A small 3-D U-Net regularises the cost volume to one logit per hypothesis; the depth is the
    softmax's expectation (soft argmax), and the **confidence** the probability mass of the 4
    hypotheses around it (MVSNet's photometric confidence).
@@ -195,13 +196,18 @@ def correlation_volume(
     depths: torch.Tensor,
     groups: int,
 ) -> torch.Tensor:
-    """The cost volume of view ``reference`` (B, G, D, H, W): features (B, V, C, H, W) at the
-    resolution of ``k`` (B, V, 3, 3), group-wise correlation of the reference's features with
-    each source's at ``depths`` (B, D, H, W), averaged over the sources that see the point."""
+    """The cost volume of view ``reference`` (B, 2 G, D, H, W): features (B, V, C, H, W) at the
+    resolution of ``k`` (B, V, 3, 3), group-wise correlation (the mean product over each group
+    of channels) of the reference's features with each source's at ``depths`` (B, D, H, W); the
+    first G channels its mean over the sources that see the point, the last G its maximum over
+    them (a point hidden from some sources still matches in the others). Where no source sees
+    the point, both are 0."""
     b, views, c, h, w = features.shape
     rays = pixel_rays(k[:, reference], h, w)
     ref = features[:, reference].reshape(b, groups, c // groups, 1, h, w)
-    total = torch.zeros(b, groups, *depths.shape[1:], dtype=features.dtype, device=features.device)
+    shape = (b, groups, *depths.shape[1:])
+    total = torch.zeros(shape, dtype=features.dtype, device=features.device)
+    best = torch.full(shape, -float("inf"), dtype=features.dtype, device=features.device)
     seen = torch.zeros(b, 1, *depths.shape[1:], dtype=features.dtype, device=features.device)
     reference_from_world = camera_from_world[:, reference]
     for source in range(views):
@@ -211,13 +217,13 @@ def correlation_volume(
             reference_from_world
         )
         warped, mask = warp(features[:, source], k[:, source], source_from_reference, rays, depths)
-        if c == groups:
-            total = total + warped * ref[:, :, 0]
-        else:
-            warped = warped.reshape(b, groups, c // groups, *depths.shape[1:])
-            total = total + (warped * ref).mean(dim=2)
+        warped = warped.reshape(b, groups, c // groups, *depths.shape[1:])
+        correlation = (warped * ref).mean(dim=2)
+        total = total + correlation
+        best = torch.maximum(best, torch.where(mask.unsqueeze(1) > 0, correlation, -float("inf")))
         seen = seen + mask.unsqueeze(1)
-    return total / seen.clamp(min=1.0)
+    best = torch.where(seen > 0, best, torch.zeros_like(best))
+    return torch.cat([total / seen.clamp(min=1.0), best], dim=1)
 
 
 def conv2d(cin: int, cout: int, stride: int = 1) -> nn.Sequential:
@@ -229,12 +235,12 @@ def conv3d(cin: int, cout: int, stride: int = 1) -> nn.Sequential:
 
 
 class Regulariser(nn.Module):
-    """A two-level 3-D U-Net from a cost volume (B, G, D, H, W) to logits (B, D, H, W); D, H and
-    W even."""
+    """A two-level 3-D U-Net from a cost volume (B, 2 G, D, H, W) to logits (B, D, H, W); D, H
+    and W even."""
 
     def __init__(self, groups: int, channels: int) -> None:
         super().__init__()
-        self.inp = conv3d(groups, channels)
+        self.inp = conv3d(2 * groups, channels)
         self.down = conv3d(channels, 2 * channels, stride=2)
         self.mid = conv3d(2 * channels, 2 * channels)
         self.up = nn.ConvTranspose3d(2 * channels, channels, 4, stride=2, padding=1)
@@ -278,12 +284,15 @@ def upsample2(x: torch.Tensor) -> torch.Tensor:
 @dataclass
 class MvsOutput:
     """Per view (B, V, ...): the refined depth at the input resolution, its confidence (the
-    product of the stages', upsampled), and the stages' depths for the training's losses."""
+    product of the stages', upsampled), and for the training's losses the stages' depths and
+    the coarse stage's hypotheses and logits (B, V, D, h, w)."""
 
     depth: torch.Tensor
     confidence: torch.Tensor
     coarse: torch.Tensor
     fine: torch.Tensor
+    coarse_planes: torch.Tensor
+    coarse_logits: torch.Tensor
 
 
 class MVS(nn.Module):
@@ -334,8 +343,10 @@ class MVS(nn.Module):
         (h2, w2), (h4, w4) = half.shape[-2:], quarter.shape[-2:]
         k2 = scale_intrinsics(k, w2 / w, h2 / h)
         k4 = scale_intrinsics(k, w4 / w, h4 / h)
-        coarse_f = coarse_f.reshape(b, views, *coarse_f.shape[1:])
-        fine_f = fine_f.reshape(b, views, *fine_f.shape[1:])
+        # Unit feature vectors: correlations are cosines (scaled by the groups), whatever the
+        # image's contrast.
+        coarse_f = F.normalize(coarse_f, dim=1).reshape(b, views, *coarse_f.shape[1:])
+        fine_f = F.normalize(fine_f, dim=1).reshape(b, views, *fine_f.shape[1:])
         stem = stem.reshape(b, views, *stem.shape[1:])
         centre = grid_centre(camera_from_world)
         offsets = (
@@ -347,12 +358,17 @@ class MVS(nn.Module):
             "confidence": [],
             "coarse": [],
             "fine": [],
+            "coarse_planes": [],
+            "coarse_logits": [],
         }
         for ref in range(views) if references is None else references:
             near, far = depth_range(k4[:, ref], camera_from_world[:, ref], centre, arch, h4, w4)
             planes = inverse_depth_planes(near, far, arch.coarse_planes)
             cost = correlation_volume(coarse_f, k4, camera_from_world, ref, planes, arch.groups)
-            coarse, coarse_conf = soft_argmax(self.coarse_regulariser(cost), planes)
+            coarse_logits = self.coarse_regulariser(cost)
+            outputs["coarse_planes"].append(planes)
+            outputs["coarse_logits"].append(coarse_logits)
+            coarse, coarse_conf = soft_argmax(coarse_logits, planes)
             centre_fine = upsample2(coarse.unsqueeze(1))[:, 0]
             planes = centre_fine.unsqueeze(1) + offsets[None, :, None, None]
             cost = correlation_volume(fine_f, k2, camera_from_world, ref, planes, arch.groups)

@@ -10,10 +10,11 @@ split's top-down view first). What the network is given is disturbed as cameras 
 each view's colour channels get a gain and an offset (``data.colour_jitter``) and Gaussian
 noise (``data.noise_std``), and each camera's pose given to the network is moved by up to
 ``data.pose_noise_m`` and ``data.pose_noise_rad`` (calibration error), while the true depth
-stays the truth. Two views a sample are reference views (the first and one other); the loss is the L1 depth error of the
-coarse (1/4), fine (1/2) and refined (full) depths, weights 0.5, 1 and 2, over the pixels whose
-true depth lies inside the pixel's workspace range, an object pixel weighing
-``1 + data.object_weight``.
+stays the truth. Two views a sample are reference views (the first and one other); the loss is
+the L1 depth error (centimetres) of the coarse (1/4), fine (1/2) and refined (full) depths,
+weights 0.5, 1 and 2, plus the cross-entropy of the coarse logits against the hypothesis
+nearest the true depth, over the pixels whose true depth lies inside the pixel's workspace
+range, an object pixel weighing ``1 + data.object_weight``.
 
 Checkpoints, resumption, the best epoch by the validation error on the object pixels (at the
 network's resolution, ``data.val_views`` views), the history and the export follow
@@ -122,8 +123,9 @@ def loss_of(
     arch: MvsArchitecture,
     object_weight: float,
 ) -> torch.Tensor:
-    """The weighted L1 of the three stages (see the module docs), metres; ``depth``, ``mask``,
-    ``k`` and ``pose`` (true) those of the output's views."""
+    """The weighted L1 of the three stages in centimetres, plus the cross-entropy of the coarse
+    logits against the hypothesis nearest the truth in inverse depth (see the module docs);
+    ``depth``, ``mask``, ``k`` and ``pose`` (true) those of the output's views."""
     total = torch.zeros(())
     for weight, predicted in zip(STAGE_WEIGHTS, (out.coarse, out.fine, out.depth), strict=True):
         h, w = predicted.shape[-2:]
@@ -132,8 +134,19 @@ def loss_of(
         valid = in_range(truth, k, pose, centre, arch).float()
         pixel_weight = valid * (1 + object_weight * on_object)
         error = (predicted - truth).abs() * pixel_weight
-        total = total + weight * error.sum() / pixel_weight.sum().clamp(min=1)
-    return total
+        total = total + weight * 100.0 * error.sum() / pixel_weight.sum().clamp(min=1)
+    h, w = out.coarse.shape[-2:]
+    truth = truth_at(depth, h, w)
+    pixel_weight = in_range(truth, k, pose, centre, arch).float() * (
+        1 + object_weight * truth_at(mask.float(), h, w)
+    )
+    inverse = 1.0 / out.coarse_planes  # (B, V, D, h, w)
+    target = (inverse - 1.0 / truth.clamp(min=1e-3).unsqueeze(2)).abs().argmin(dim=2)
+    b, v, d = out.coarse_logits.shape[:3]
+    cross_entropy = F.cross_entropy(
+        out.coarse_logits.reshape(b * v, d, h, w), target.reshape(b * v, h, w), reduction="none"
+    ).reshape(b, v, h, w)
+    return total + (cross_entropy * pixel_weight).sum() / pixel_weight.sum().clamp(min=1)
 
 
 def evaluate(net: MVS, objects: list, views: int, seed: int) -> dict[str, float]:
@@ -224,11 +237,11 @@ def train(config: MvsExperimentConfig, out: Path, log=print) -> dict[str, float]
             optimiser.step()
             total += loss.item()
         figures = evaluate(net, val, data.val_views, config.seed) if val else {}
-        record = {"epoch": epoch, "train_loss_mm": 1e3 * total / steps, **figures}
+        record = {"epoch": epoch, "train_loss": total / steps, **figures}
         record["seconds"] = time.time() - started
         history.append(record)
         log(json.dumps(record))
-        score = figures.get("object_mm", record["train_loss_mm"])
+        score = figures.get("object_mm", record["train_loss"])
         if score < best:
             best = score
             state = {"model": net.state_dict(), "arch": asdict(arch), "epoch": epoch}
@@ -269,7 +282,7 @@ def export_best(config: MvsExperimentConfig, out: Path, stem: Path) -> Path:
         "date": time.strftime("%Y-%m-%d"),
     }
     plot_lsm_history(
-        [{**r, "train_l1_mm": r["train_loss_mm"]} for r in history],
+        [{**r, "train_l1_mm": r["train_loss"]} for r in history],
         out / "learning_curve.png",
         title=config.name,
     )

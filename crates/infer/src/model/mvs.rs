@@ -4,9 +4,10 @@
 //! 1. a 2-D encoder per view (shared weights): an image-resolution stem, features at 1/2 and
 //!    1/4 of the input;
 //! 2. per reference view, a coarse cost volume at 1/4 over hypotheses uniform in inverse depth
-//!    along each ray's stretch inside the workspace ([`depth_range`]), group-wise correlation
-//!    with every other view ([`correlation_volume`]), a 3-D U-Net to logits and a soft argmax
-//!    ([`soft_argmax`]) to depth and confidence;
+//!    along each ray's stretch inside the workspace ([`depth_range`]), group-wise correlation of
+//!    unit feature vectors with every other view, its mean and maximum over the sources
+//!    ([`correlation_volume`]), a 3-D U-Net to logits and a soft argmax ([`soft_argmax`]) to
+//!    depth and confidence;
 //! 3. a fine cost volume at 1/2 over `fine_planes` hypotheses `fine_step_m` apart around the
 //!    coarse depth, the same way;
 //! 4. a 2-D refinement at the input's resolution: a residual of at most `fine_step_m`.
@@ -19,7 +20,8 @@ use crate::error::{InferError, Result};
 use crate::model::lsm::scale_intrinsics;
 use crate::model::weights::{Weights, beside, parse_description, read_description};
 use crate::ops::plane_sweep::{
-    Workspace, correlation_volume, depth_range, inverse_depth_planes, soft_argmax,
+    Workspace, correlation_volume, depth_range, inverse_depth_planes, normalise_channels,
+    soft_argmax,
 };
 use crate::ops::{
     CameraMatrices, Conv2dParams, Conv3dParams, VoxelGrid, concat, conv_transpose3d, conv2d,
@@ -172,7 +174,7 @@ impl Conv {
     }
 }
 
-/// The 3-D U-Net from a cost volume `[1, G, D, h, w]` to logits `[D, h, w]`.
+/// The 3-D U-Net from a cost volume `[1, 2 G, D, h, w]` to logits `[D, h, w]`.
 #[derive(Debug)]
 struct Regulariser {
     inp: Conv,
@@ -187,7 +189,7 @@ struct Regulariser {
 impl Regulariser {
     fn take(w: &mut Weights, name: &str, groups: usize, c: usize) -> Result<Self> {
         Ok(Self {
-            inp: Conv::take(w, &format!("{name}.inp"), groups, c, 3, 1, true)?,
+            inp: Conv::take(w, &format!("{name}.inp"), 2 * groups, c, 3, 1, true)?,
             down: Conv::take(w, &format!("{name}.down"), c, 2 * c, 3, 2, true)?,
             mid: Conv::take(w, &format!("{name}.mid"), 2 * c, 2 * c, 3, 1, true)?,
             up_weight: w.take(&format!("{name}.up.weight"), &[2 * c, c, 4, 4, 4])?,
@@ -380,10 +382,12 @@ impl Mvs {
         let stem = self.stem.run(&input, par)?;
         let half = self.encode_half[1].run(&self.encode_half[0].run(&stem, par)?, par)?;
         let quarter = self.encode_quarter[1].run(&self.encode_quarter[0].run(&half, par)?, par)?;
-        let coarse_features = self.coarse_features.run(&quarter, par)?;
+        let mut coarse_features = self.coarse_features.run(&quarter, par)?;
+        normalise_channels(&mut coarse_features)?;
         let (h2, w2, h4, w4) = (h / 2, w / 2, h / 4, w / 4);
         let up = resize_bilinear(&quarter, h2, w2)?;
-        let fine_features = self.fine_features.run(&concat(&[&half, &up], 1)?, par)?;
+        let mut fine_features = self.fine_features.run(&concat(&[&half, &up], 1)?, par)?;
+        normalise_channels(&mut fine_features)?;
         let scaled = |sx: usize, sy: usize| -> Vec<CameraMatrices> {
             cameras
                 .iter()
@@ -403,7 +407,7 @@ impl Mvs {
                 inverse_depth_planes(&near, &far, a.coarse_planes),
             )?;
             let mut cost = correlation_volume(&coarse_features, &k4, reference, &planes, a.groups)?;
-            cost.reshape(&[1, a.groups, a.coarse_planes, h4, w4])?;
+            cost.reshape(&[1, 2 * a.groups, a.coarse_planes, h4, w4])?;
             let logits = self.coarse_regulariser.run(&cost, par)?;
             let (coarse, coarse_confidence) = soft_argmax(&logits, &planes)?;
             let centre_fine = resize_bilinear(&Tensor::new(&[1, 1, h4, w4], coarse)?, h2, w2)?;
@@ -418,7 +422,7 @@ impl Mvs {
             }
             let planes = Tensor::new(&[a.fine_planes, h2, w2], fine_planes)?;
             let mut cost = correlation_volume(&fine_features, &k2, reference, &planes, a.groups)?;
-            cost.reshape(&[1, a.groups, a.fine_planes, h2, w2])?;
+            cost.reshape(&[1, 2 * a.groups, a.fine_planes, h2, w2])?;
             let logits = self.fine_regulariser.run(&cost, par)?;
             let (fine, fine_confidence) = soft_argmax(&logits, &planes)?;
             let fine_up = resize_bilinear(&Tensor::new(&[1, 1, h2, w2], fine)?, h, w)?;

@@ -235,8 +235,9 @@ fn project(
 /// (`cameras` with `k` at that resolution), `depths` `[D, h, w]` the hypotheses of each
 /// reference pixel. Each source's features are sampled bilinearly where the hypothesis' point
 /// falls (nothing outside its image or behind it) and correlated with the reference's, the
-/// mean product over each of `groups` groups of channels, then averaged over the sources that
-/// see the point: `[groups, D, h, w]`.
+/// mean product over each of `groups` groups of channels: `[2 groups, D, h, w]`, the first
+/// `groups` channels the mean over the sources that see the point, the last `groups` the
+/// maximum over them (both 0 where none sees it).
 ///
 /// # Errors
 /// [`InferError::ShapeMismatch`] or [`InferError::InvalidParameter`] for inputs that do not
@@ -272,9 +273,10 @@ pub fn correlation_volume(
         .map(|s| (s, source_from_reference(&cameras[s], reference_camera)))
         .collect();
     let hypotheses = depths.data();
-    let mut out = vec![0.0f32; groups * planes * pixels];
+    let mut out = vec![0.0f32; 2 * groups * planes * pixels];
     let mut sample = vec![0.0f32; c];
     let mut total = vec![0.0f32; groups];
+    let mut best = vec![0.0f32; groups];
     let scale = 1.0 / per_group as f32;
     for y in 0..h {
         for x in 0..w {
@@ -284,6 +286,7 @@ pub fn correlation_volume(
             for d in 0..planes {
                 let depth = hypotheses[d * pixels + p];
                 total.iter_mut().for_each(|t| *t = 0.0);
+                best.iter_mut().for_each(|b| *b = f32::NEG_INFINITY);
                 let mut seen = 0u32;
                 for (s, rel) in &sources {
                     let Some((u, v)) = project(rel, &cameras[*s].k, ray, depth, w, h) else {
@@ -291,24 +294,27 @@ pub fn correlation_volume(
                     };
                     seen += 1;
                     bilinear(&interleaved[*s], c, w, h, u, v, &mut sample);
-                    for (g, t) in total.iter_mut().enumerate() {
+                    for (g, (t, b)) in total.iter_mut().zip(&mut best).enumerate() {
                         let range = g * per_group..(g + 1) * per_group;
                         let dot: f32 = sample[range.clone()]
                             .iter()
                             .zip(&own[range])
                             .map(|(a, b)| a * b)
                             .sum();
-                        *t += dot * scale;
+                        let correlation = dot * scale;
+                        *t += correlation;
+                        *b = b.max(correlation);
                     }
                 }
                 let norm = 1.0 / seen.max(1) as f32;
-                for (g, t) in total.iter().enumerate() {
+                for (g, (t, b)) in total.iter().zip(&best).enumerate() {
                     out[(g * planes + d) * pixels + p] = t * norm;
+                    out[((groups + g) * planes + d) * pixels + p] = if seen > 0 { *b } else { 0.0 };
                 }
             }
         }
     }
-    Tensor::new(&[groups, planes, h, w], out)
+    Tensor::new(&[2 * groups, planes, h, w], out)
 }
 
 /// The bilinear sample at `(u, v)` (inside the image) of pixel-major features `[h, w, C]`:
@@ -363,6 +369,7 @@ pub fn correlation_volume_reference(
         }
     };
     let mut total = vec![0.0f32; groups * planes * pixels];
+    let mut best = vec![f32::NEG_INFINITY; groups * planes * pixels];
     let mut seen = vec![0.0f32; planes * pixels];
     for source in (0..views).filter(|&s| s != reference) {
         let rel = source_from_reference(&cameras[source], &cameras[reference]);
@@ -388,7 +395,10 @@ pub fn correlation_volume_reference(
                                 + fy * fx * at(source, ch, y0 + 1, x0 + 1);
                             sum += value * at(reference, ch, y as isize, x as isize);
                         }
-                        total[(g * planes + d) * pixels + p] += sum / per_group as f32;
+                        let correlation = sum / per_group as f32;
+                        total[(g * planes + d) * pixels + p] += correlation;
+                        let b = &mut best[(g * planes + d) * pixels + p];
+                        *b = b.max(correlation);
                     }
                 }
             }
@@ -397,9 +407,42 @@ pub fn correlation_volume_reference(
     for g in 0..groups {
         for i in 0..planes * pixels {
             total[g * planes * pixels + i] /= seen[i].max(1.0);
+            if seen[i] == 0.0 {
+                best[g * planes * pixels + i] = 0.0;
+            }
         }
     }
-    Tensor::new(&[groups, planes, h, w], total)
+    total.extend(best);
+    Tensor::new(&[2 * groups, planes, h, w], total)
+}
+
+/// Each pixel's feature vector of `[N, C, h, w]` scaled to unit length (torch's
+/// `F.normalize(x, dim=1)`: divided by `max(norm, 1e-12)`), in place.
+///
+/// # Errors
+/// [`InferError::ShapeMismatch`] for a tensor not of rank 4.
+pub fn normalise_channels(x: &mut Tensor) -> Result<()> {
+    let &[n, c, h, w] = x.shape() else {
+        return Err(shape_error(
+            "normalise_channels",
+            "[batch, channels, height, width]",
+            x.shape(),
+        ));
+    };
+    let pixels = h * w;
+    for image in x.data_mut().chunks_exact_mut(c * pixels.max(1)).take(n) {
+        for p in 0..pixels {
+            let norm = (0..c)
+                .map(|ch| image[ch * pixels + p] * image[ch * pixels + p])
+                .sum::<f32>()
+                .sqrt()
+                .max(1e-12);
+            for ch in 0..c {
+                image[ch * pixels + p] /= norm;
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The softmax over hypotheses of `logits` `[D, h, w]` and its expectation over `depths`
@@ -560,7 +603,7 @@ mod tests {
             let fast = correlation_volume(&features, &cameras, 1, &depths, groups).unwrap();
             let plain =
                 correlation_volume_reference(&features, &cameras, 1, &depths, groups).unwrap();
-            assert_eq!(fast.shape(), [groups, 6, 24, 32]);
+            assert_eq!(fast.shape(), [2 * groups, 6, 24, 32]);
             let worst = fast
                 .data()
                 .iter()

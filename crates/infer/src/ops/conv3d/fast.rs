@@ -1,6 +1,7 @@
 //! The fast 3-D convolution: each image is unfolded into a `[C * k0 * k1 * k2, positions]`
 //! column matrix (vol2col) a band of output slices at a time, and one faer product with the
-//! weight, read as `[out_C, C * k0 * k1 * k2]`, writes the band's outputs in place.
+//! weight, read as `[out_C, C * k0 * k1 * k2]`, writes the band's outputs in place; a 3x3x3
+//! "same" convolution of few channels runs row by row instead ([`super::rows`]).
 
 use std::ops::Range;
 
@@ -54,6 +55,13 @@ pub fn conv3d_into(
     out.resize(&g.output_shape());
     let (in_len, out_len) = (g.input_len(), g.output_len());
     if g.n == 0 || out_len == 0 {
+        return Ok(());
+    }
+    if super::rows::applies(&g) {
+        let (x, k) = (input.data(), weight.data());
+        for (i, y) in out.data_mut().chunks_exact_mut(out_len).enumerate() {
+            super::rows::image(&g, &x[i * in_len..(i + 1) * in_len], k, bias, y, par);
+        }
         return Ok(());
     }
     let band = band_slices(&g);

@@ -4,6 +4,7 @@
 mod fast;
 mod geometry;
 mod reference;
+mod rows;
 mod transposed;
 
 pub use fast::{conv3d, conv3d_into};

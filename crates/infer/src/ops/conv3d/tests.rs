@@ -10,6 +10,9 @@ use crate::testing::{Rng, assert_close, assert_same_bits};
 fn cases() -> Vec<([usize; 5], usize, [usize; 3], Conv3dParams)> {
     vec![
         ([1, 3, 6, 5, 4], 4, [3, 3, 3], Conv3dParams::cubic(1, 1)),
+        // Too many channels for the row-by-row form: the column matrix's.
+        ([1, 20, 4, 3, 5], 16, [3, 3, 3], Conv3dParams::cubic(1, 1)),
+        ([2, 8, 5, 4, 7], 1, [3, 3, 3], Conv3dParams::cubic(1, 1)),
         ([2, 2, 7, 6, 6], 3, [3, 3, 3], Conv3dParams::cubic(2, 1)),
         ([1, 4, 4, 4, 4], 2, [4, 4, 4], Conv3dParams::cubic(2, 1)),
         (
