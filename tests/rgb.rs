@@ -9,7 +9,12 @@ use mvgrasp::geometry::{Camera, Vec3};
 use mvgrasp::planner::{read_rgb_dir, read_views_dir};
 
 use crate::common::render_dataset;
+use mvgrasp::mvs::mvs_depths;
 use mvgrasp::planner::{DepthFrom, DepthPredictor};
+
+/// The shipped MVS network's median error on a box's top-down view must stay under this
+/// (README, "Depth from RGB": measured on unseen objects).
+const MVS_TOP_DOWN_MEDIAN_M: f32 = 0.005;
 use mvgrasp::stereo::{SweepParams, sweep_depths};
 
 fn plan_rgb(dir: &Path, extra: &[&str]) -> std::process::Output {
@@ -166,6 +171,52 @@ fn the_shipped_lsm_predicts_the_box_within_its_measured_error_and_plan_rgb_runs_
     .unwrap();
     let err = lsm.depths(&[level]).unwrap_err().to_string();
     assert!(err.contains("does not look down at the table"), "{err}");
+}
+
+#[test]
+fn the_shipped_mvs_predicts_the_box_within_its_measured_error_and_marks_doubt_as_missing() {
+    let dir = tempfile::tempdir().unwrap();
+    render_dataset(dir.path(), "box");
+    let test = dir.path().join("box_000/test");
+    let rgb = read_rgb_dir(&test).unwrap();
+    let truth = read_views_dir(&test).unwrap();
+    let shipped = DepthPredictor::shipped(DepthFrom::Mvs).unwrap();
+    let DepthPredictor::Mvs { net, .. } = &shipped else {
+        panic!("the shipped MVS predictor is {shipped:?}");
+    };
+    let predicted = mvs_depths(net, &rgb[..5], 0.0).unwrap();
+    assert_eq!(predicted.len(), 5);
+    // The top-down view's box pixels: every one predicted, the median error within the
+    // network's measured accuracy (README: MVS_TOP_DOWN_MEDIAN_M on unseen objects from 5
+    // views); off the box the table plane (the mask), with full confidence.
+    let mask = rgb[0].mask.as_ref().unwrap();
+    let truth0 = truth[0].depth.as_slice();
+    let mut errors: Vec<f32> = (0..mask.len())
+        .filter(|&i| mask[i])
+        .map(|i| (predicted[0].depth_m[i] - truth0[i]).abs())
+        .collect();
+    assert!(errors.iter().all(|e| e.is_finite()));
+    errors.sort_by(f32::total_cmp);
+    let median = errors[errors.len() / 2];
+    assert!(median < MVS_TOP_DOWN_MEDIAN_M, "median error {median} m");
+    let off = (0..mask.len())
+        .find(|&i| !mask[i] && truth0[i] > 0.0)
+        .unwrap();
+    assert!((predicted[0].depth_m[off] - truth0[off]).abs() < 1e-3);
+    assert_eq!(predicted[0].confidence[off], 1.0);
+    // A confidence threshold leaves exactly the doubtful object pixels missing.
+    let threshold = 0.5;
+    let strict = mvs_depths(net, &rgb[..5], threshold).unwrap();
+    for (view, (all, kept)) in predicted.iter().zip(&strict).enumerate() {
+        for i in 0..all.depth_m.len() {
+            let doubtful = all.confidence[i] < threshold;
+            let want = if doubtful { 0.0 } else { all.depth_m[i] };
+            assert_eq!(kept.depth_m[i], want, "view {view}, pixel {i}");
+        }
+    }
+    // One view is not stereo.
+    let err = mvs_depths(net, &rgb[..1], 0.0).unwrap_err().to_string();
+    assert!(err.contains("at least 2 views"), "{err}");
 }
 
 #[test]

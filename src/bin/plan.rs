@@ -286,7 +286,7 @@ fn depth_from_words(from: DepthFrom) -> &'static str {
 /// `--depth-from`: the predictor, or `None` for rendered depth (a mesh only).
 fn depth_from_of(args: &Args) -> Result<Option<DepthFrom>, String> {
     match args.depth_from.as_deref() {
-        None => Ok(Some(DepthFrom::Lsm)),
+        None => Ok(Some(DepthFrom::DEFAULT)),
         Some("rendered") if args.rgb.is_none() => Ok(None),
         Some(name) => name.parse().map(Some).map_err(|e| {
             let rendered = if args.rgb.is_none() {
@@ -358,7 +358,7 @@ fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
     use std::fmt::Write;
     let (model_name, policy, gripper, params) = sensor_setup(args)?;
     let (report, depth) = if args.rgb.is_some() {
-        let from = depth_from_of(args)?.unwrap_or(DepthFrom::Lsm);
+        let from = depth_from_of(args)?.unwrap_or(DepthFrom::DEFAULT);
         let predictor = DepthPredictor::shipped(from).map_err(|e| e.to_string())?;
         let rgb = plan_on_rgb_dir(&policy, &gripper, dir, &params, &predictor)
             .map_err(|e| e.to_string())?;

@@ -130,6 +130,9 @@ impl std::str::FromStr for DepthFrom {
 }
 
 impl DepthFrom {
+    /// The predictor of `plan`'s default run and of `plan --rgb` without `--depth-from`.
+    pub const DEFAULT: Self = Self::Lsm;
+
     /// Its name on the command line and in summaries.
     pub fn name(self) -> &'static str {
         match self {

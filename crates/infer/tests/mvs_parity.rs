@@ -105,7 +105,15 @@ fn the_geometry_matches_torch() {
     let planes = inverse_depth_planes(&near, &far, 6);
     assert_near(&planes, want_planes.data(), 1e-5, "planes");
     let features = io.take("volume.features");
-    let volume = correlation_volume(&features, &cameras, 1, &want_planes, 2).unwrap();
+    let volume = correlation_volume(
+        &features,
+        &cameras,
+        1,
+        &want_planes,
+        2,
+        Parallelism::Sequential,
+    )
+    .unwrap();
     assert_near(
         volume.data(),
         io.take("volume.y").data(),

@@ -406,7 +406,8 @@ impl Mvs {
                 &[a.coarse_planes, h4, w4],
                 inverse_depth_planes(&near, &far, a.coarse_planes),
             )?;
-            let mut cost = correlation_volume(&coarse_features, &k4, reference, &planes, a.groups)?;
+            let mut cost =
+                correlation_volume(&coarse_features, &k4, reference, &planes, a.groups, par)?;
             cost.reshape(&[1, 2 * a.groups, a.coarse_planes, h4, w4])?;
             let logits = self.coarse_regulariser.run(&cost, par)?;
             let (coarse, coarse_confidence) = soft_argmax(&logits, &planes)?;
@@ -421,7 +422,8 @@ impl Mvs {
                 }
             }
             let planes = Tensor::new(&[a.fine_planes, h2, w2], fine_planes)?;
-            let mut cost = correlation_volume(&fine_features, &k2, reference, &planes, a.groups)?;
+            let mut cost =
+                correlation_volume(&fine_features, &k2, reference, &planes, a.groups, par)?;
             cost.reshape(&[1, 2 * a.groups, a.fine_planes, h2, w2])?;
             let logits = self.fine_regulariser.run(&cost, par)?;
             let (fine, fine_confidence) = soft_argmax(&logits, &planes)?;

@@ -7,9 +7,12 @@
 //! Cameras are [`CameraMatrices`] (OpenCV frames, pixel centres at integers); depth is along
 //! the optical axis, metres.
 
+use rayon::prelude::*;
+
 use crate::error::{InferError, Result};
 use crate::ops::CameraMatrices;
 use crate::ops::check::shape_error;
+use crate::parallel::Parallelism;
 use crate::tensor::Tensor;
 
 /// The nearest depth a hypothesis may have, metres (`MIN_DEPTH_M` of the training code).
@@ -237,7 +240,7 @@ fn project(
 /// falls (nothing outside its image or behind it) and correlated with the reference's, the
 /// mean product over each of `groups` groups of channels: `[2 groups, D, h, w]`, the first
 /// `groups` channels the mean over the sources that see the point, the last `groups` the
-/// maximum over them (both 0 where none sees it).
+/// maximum over them (both 0 where none sees it). The reference's rows run on `par`'s threads.
 ///
 /// # Errors
 /// [`InferError::ShapeMismatch`] or [`InferError::InvalidParameter`] for inputs that do not
@@ -248,6 +251,7 @@ pub fn correlation_volume(
     reference: usize,
     depths: &Tensor,
     groups: usize,
+    par: Parallelism,
 ) -> Result<Tensor> {
     const OP: &str = "correlation_volume";
     let (views, c, h, w, planes) = check_volume(OP, features, cameras, reference, depths, groups)?;
@@ -273,16 +277,20 @@ pub fn correlation_volume(
         .map(|s| (s, source_from_reference(&cameras[s], reference_camera)))
         .collect();
     let hypotheses = depths.data();
-    let mut out = vec![0.0f32; 2 * groups * planes * pixels];
-    let mut sample = vec![0.0f32; c];
-    let mut total = vec![0.0f32; groups];
-    let mut best = vec![0.0f32; groups];
     let scale = 1.0 / per_group as f32;
-    for y in 0..h {
+    // Each reference row on its own (pixel-major: [w][2 groups][D]), the rows shared among
+    // `par`'s threads; every value is the same whatever the split.
+    let row_len = w * 2 * groups * planes;
+    let mut rows = vec![0.0f32; h * row_len];
+    let run = |(y, row): (usize, &mut [f32])| {
+        let mut sample = vec![0.0f32; c];
+        let mut total = vec![0.0f32; groups];
+        let mut best = vec![0.0f32; groups];
         for x in 0..w {
             let p = y * w + x;
             let ray = pixel_ray(&reference_camera.k, x as f32, y as f32);
             let own = &interleaved[reference][p * c..(p + 1) * c];
+            let cell = &mut row[x * 2 * groups * planes..(x + 1) * 2 * groups * planes];
             for d in 0..planes {
                 let depth = hypotheses[d * pixels + p];
                 total.iter_mut().for_each(|t| *t = 0.0);
@@ -308,10 +316,21 @@ pub fn correlation_volume(
                 }
                 let norm = 1.0 / seen.max(1) as f32;
                 for (g, (t, b)) in total.iter().zip(&best).enumerate() {
-                    out[(g * planes + d) * pixels + p] = t * norm;
-                    out[((groups + g) * planes + d) * pixels + p] = if seen > 0 { *b } else { 0.0 };
+                    cell[g * planes + d] = t * norm;
+                    cell[(groups + g) * planes + d] = if seen > 0 { *b } else { 0.0 };
                 }
             }
+        }
+    };
+    if par.threads() > 1 {
+        rows.par_chunks_mut(row_len).enumerate().for_each(run);
+    } else {
+        rows.chunks_mut(row_len).enumerate().for_each(run);
+    }
+    let mut out = vec![0.0f32; 2 * groups * planes * pixels];
+    for (p, cell) in rows.chunks_exact(2 * groups * planes).enumerate() {
+        for (i, &value) in cell.iter().enumerate() {
+            out[i * pixels + p] = value;
         }
     }
     Tensor::new(&[2 * groups, planes, h, w], out)
@@ -600,7 +619,25 @@ mod tests {
         let mut rng = Rng::new(3);
         let (features, cameras, depths) = random_setup(&mut rng);
         for groups in [1, 2, 4] {
-            let fast = correlation_volume(&features, &cameras, 1, &depths, groups).unwrap();
+            let fast = correlation_volume(
+                &features,
+                &cameras,
+                1,
+                &depths,
+                groups,
+                Parallelism::Sequential,
+            )
+            .unwrap();
+            let split = correlation_volume(
+                &features,
+                &cameras,
+                1,
+                &depths,
+                groups,
+                Parallelism::Rayon { threads: 3 },
+            )
+            .unwrap();
+            assert_eq!(fast, split, "the same bits whatever the threads");
             let plain =
                 correlation_volume_reference(&features, &cameras, 1, &depths, groups).unwrap();
             assert_eq!(fast.shape(), [2 * groups, 6, 24, 32]);
@@ -620,7 +657,9 @@ mod tests {
         let (features, cameras, _) = random_setup(&mut rng);
         // Behind every camera: no source sees it.
         let depths = Tensor::full(&[2, 24, 32], -1.0);
-        let volume = correlation_volume(&features, &cameras, 0, &depths, 2).unwrap();
+        let volume =
+            correlation_volume(&features, &cameras, 0, &depths, 2, Parallelism::Sequential)
+                .unwrap();
         assert!(volume.data().iter().all(|&v| v == 0.0));
     }
 
@@ -628,11 +667,12 @@ mod tests {
     fn bad_inputs_are_refused() {
         let mut rng = Rng::new(5);
         let (features, cameras, depths) = random_setup(&mut rng);
-        assert!(correlation_volume(&features, &cameras[..2], 0, &depths, 2).is_err());
-        assert!(correlation_volume(&features, &cameras, 3, &depths, 2).is_err());
-        assert!(correlation_volume(&features, &cameras, 0, &depths, 3).is_err());
+        let seq = Parallelism::Sequential;
+        assert!(correlation_volume(&features, &cameras[..2], 0, &depths, 2, seq).is_err());
+        assert!(correlation_volume(&features, &cameras, 3, &depths, 2, seq).is_err());
+        assert!(correlation_volume(&features, &cameras, 0, &depths, 3, seq).is_err());
         let small = Tensor::zeros(&[6, 12, 32]);
-        assert!(correlation_volume(&features, &cameras, 0, &small, 2).is_err());
+        assert!(correlation_volume(&features, &cameras, 0, &small, 2, seq).is_err());
     }
 
     #[test]
