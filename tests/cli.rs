@@ -31,10 +31,11 @@ fn plan_with_no_arguments_plans_on_depth_from_rgb_beside_the_rendered_depth() {
     assert!(text.contains("training views: 20 views"), "{text}");
     assert!(text.contains("test views:     10 views"), "{text}");
     assert!(text.contains("stable"), "{text}");
-    // RGB -> depth by the shipped LSM from 5 views -> the top-down GQ-CNN in the top-down one.
+    // RGB -> depth by the plane-sweep baseline from 5 views 0.7 m away (the top-down GQ-CNN's
+    // distance) -> the top-down GQ-CNN in the top-down one.
     assert!(
         text.contains("plan: gqcnn_small_topdown (GQ-CNN in the first, top-down view")
-            && text.contains("5 view(s) 0.65 m away"),
+            && text.contains("5 view(s) 0.70 m away"),
         "{text}"
     );
     assert!(
@@ -42,7 +43,7 @@ fn plan_with_no_arguments_plans_on_depth_from_rgb_beside_the_rendered_depth() {
         "only the top-down view plans: {text}"
     );
     assert!(
-        text.contains("predicted by the Learnt Stereo Machine (models/lsm_small)"),
+        text.contains("predicted by the plane-sweep baseline"),
         "{text}"
     );
     assert!(
@@ -130,7 +131,7 @@ fn plan_json_on_depth_from_rgb_is_deterministic_and_carries_the_true_depth_run()
     for (args, says) in [
         (
             &["--depth-from", "stereo"][..],
-            "expected lsm or baseline, or rendered",
+            "expected mvs, lsm or baseline, or rendered",
         ),
         (
             &["--depth-from", "lsm", "--views", "1"][..],
@@ -415,6 +416,26 @@ fn grasps_reports_bad_input_in_one_line_and_exits_2() {
         assert!(
             stderr.starts_with("error: ") && stderr.contains(needle),
             "{stderr}"
+        );
+    }
+}
+
+/// The promise of the README's first command: from RGB alone, the default run's grasp on its
+/// default object holds in the project's trial, whatever the seed of its views and colours.
+#[test]
+fn the_default_run_from_rgb_holds_its_grasp_on_seeds_0_1_and_2() {
+    for seed in ["0", "1", "2"] {
+        let out = plan(&["--seed", seed]);
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = String::from_utf8(out.stdout).unwrap();
+        assert!(
+            text.contains("physics (rapier: close, lift, shake): held"),
+            "seed {seed}: {text}"
         );
     }
 }

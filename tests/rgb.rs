@@ -1,5 +1,6 @@
 //! Planning on RGB views (`plan --rgb`): depth predicted from a `render` folder's colour
-//! images and cameras by the shipped Learnt Stereo Machine or the plane-sweep baseline, the
+//! images and cameras by the plane-sweep baseline, the shipped multi-view stereo network or the
+//! shipped Learnt Stereo Machine, the
 //! multi-view planner on it; and the one line of each kind of bad input.
 
 use std::path::Path;
@@ -133,18 +134,24 @@ fn the_shipped_lsm_predicts_the_box_within_its_measured_error_and_plan_rgb_runs_
             "view {view}: the table"
         );
     }
-    // The default predictor of plan --rgb; a grasp or none (exit 3), the same bytes twice.
-    let a = plan_rgb(&test, &["--json"]);
-    let b = plan_rgb(&test, &["--json"]);
+    // plan --rgb with the LSM: a grasp or none (exit 3), the same bytes twice.
+    let a = plan_rgb(&test, &["--json", "--depth-from", "lsm"]);
+    let b = plan_rgb(&test, &["--json", "--depth-from", "lsm"]);
     assert!(
         matches!(a.status.code(), Some(0 | 3)),
         "{}",
         String::from_utf8_lossy(&a.stderr)
     );
     assert_eq!(a.stdout, b.stdout);
-    let text = String::from_utf8(plan_rgb(&test, &[]).stdout).unwrap();
+    let text = String::from_utf8(plan_rgb(&test, &["--depth-from", "lsm"]).stdout).unwrap();
     assert!(
         text.contains("predicted from RGB by the Learnt Stereo Machine"),
+        "{text}"
+    );
+    // The default predictor of plan --rgb is the baseline.
+    let text = String::from_utf8(plan_rgb(&test, &[]).stdout).unwrap();
+    assert!(
+        text.contains("predicted from RGB by the plane-sweep baseline"),
         "{text}"
     );
     // One view: the grid centred on its axis above the table; every box pixel predicted, the

@@ -316,14 +316,14 @@ fn rgb_views(
     Ok(views)
 }
 
-/// Plans a grasp on RGB views, as `plan --rgb` does: the views' depth predicted by the shipped
-/// Learnt Stereo Machine (`depth_from="lsm"`) or the plane-sweep baseline
-/// (`depth_from="baseline"`), then the multi-view planner. `images`: per view an `(H, W, 3)` uint8 image;
+/// Plans a grasp on RGB views, as `plan --rgb` does: the views' depth predicted by the
+/// plane-sweep baseline (`depth_from="baseline"`, the default), the shipped multi-view stereo
+/// network (`"mvs"`) or the shipped Learnt Stereo Machine (`"lsm"`), then the multi-view planner. `images`: per view an `(H, W, 3)` uint8 image;
 /// `ks`, `world_from_cameras`: their cameras, posed in the table frame (z up, the table at
 /// z = 0); `masks`: per view the object's pixels or `None`. Returns `grasps.json`'s content
 /// (with `as_json`, its text).
 #[pyfunction]
-#[pyo3(signature = (images, ks, world_from_cameras, *, masks = None, model = None, depth_from = "lsm", cem = false, hand_check = true, seed = 0, as_json = false))]
+#[pyo3(signature = (images, ks, world_from_cameras, *, masks = None, model = None, depth_from = "baseline", cem = false, hand_check = true, seed = 0, as_json = false))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn plan_rgb<'py>(
     py: Python<'py>,
@@ -350,13 +350,14 @@ pub(crate) fn plan_rgb<'py>(
     grasps_output(py, &file.map_err(pipeline_error)?, as_json)
 }
 
-/// Each RGB view's depth predicted from all of them (`depth_from="lsm"`: the shipped Learnt
-/// Stereo Machine; `"baseline"`: silhouette carving and a plane sweep, `mvgrasp::stereo`), as
+/// Each RGB view's depth predicted from all of them (`depth_from="baseline"`, the default:
+/// silhouette carving and a plane sweep, `mvgrasp::stereo`; `"mvs"`: the shipped multi-view
+/// stereo network; `"lsm"`: the shipped Learnt Stereo Machine), as
 /// `plan --rgb` predicts it: a `(V, H, W)`
 /// float32 array, metres along each optical axis, 0 where unknown. The inputs are
-/// `plan_rgb`'s; the LSM also takes a single view (the baseline needs two).
+/// `plan_rgb`'s; the LSM also takes a single view (the baseline and the MVS network need two).
 #[pyfunction]
-#[pyo3(signature = (images, ks, world_from_cameras, *, masks = None, depth_from = "lsm"))]
+#[pyo3(signature = (images, ks, world_from_cameras, *, masks = None, depth_from = "baseline"))]
 pub(crate) fn predict_depth<'py>(
     py: Python<'py>,
     images: Vec<PyReadonlyArray3<'py, u8>>,

@@ -80,15 +80,19 @@ def test_planning_on_a_mesh_matches_the_cli_and_checks_in_physics(tmp_path: Path
     assert fused.best.virtual_quality is not None and 0.0 <= fused.best.quality <= 1.0
     with pytest.raises(ValueError, match="views = 11"):
         mvgrasp.Planner().plan_mesh(vertices, triangles, views=11)
-    # The CLI's default: depth predicted by the LSM from 5 colour views, the top-down GQ-CNN
-    # in the top-down one; the same bytes.
-    plan_cli("--category", "box", "--no-physics", "--out", str(tmp_path / "lsm"))
+    # The CLI's default: depth predicted by the baseline from 5 colour views, the top-down
+    # GQ-CNN in the top-down one; the same bytes.
+    plan_cli("--category", "box", "--no-physics", "--out", str(tmp_path / "rgb"))
+    assert (tmp_path / "rgb" / "views.png").is_file()
+    default = mvgrasp.Planner().plan_mesh(vertices, triangles, physics=False,
+                                          depth_from="baseline")  # fmt: skip
+    assert default.grasps_json.encode() == (tmp_path / "rgb" / "grasps.json").read_bytes()
     learnt = mvgrasp.Planner().plan_mesh(vertices, triangles, physics=False, depth_from="lsm")
-    assert learnt.grasps_json.encode() == (tmp_path / "lsm" / "grasps.json").read_bytes()
     assert learnt.timings["depth_s"] > 0 and len(learnt.views) == 5
     assert learnt.grasps and all(g.view == 0 for g in learnt.grasps)
     # --fuse: the multi-view planner on the same predicted views.
-    plan_cli("--category", "box", "--no-physics", "--fuse", "--out", str(tmp_path / "lsm_fused"))
+    plan_cli("--category", "box", "--no-physics", "--fuse", "--depth-from", "lsm", "--out",
+             str(tmp_path / "lsm_fused"))  # fmt: skip
     fused_rgb = mvgrasp.Planner(fuse=True).plan_mesh(vertices, triangles, physics=False,
                                                      depth_from="lsm")  # fmt: skip
     assert fused_rgb.grasps_json.encode() == (tmp_path / "lsm_fused" / "grasps.json").read_bytes()
@@ -168,14 +172,24 @@ def test_planning_on_rgb_views_writes_the_cli_grasps_json_byte_for_byte(tmp_path
     assert result.grasps_json.encode() == (tmp_path / "cli" / "grasps.json").read_bytes()
     assert result.frame == "given" and len(result.views) == 10
     assert result.best is not None and result.best.view_quality is not None
-    # The LSM's (the default): every pixel predicted, the box's within the network's error.
+    # The default is the baseline's.
+    default = mvgrasp.predict_depth(images[:5], [c.k for c in cameras[:5]],
+                                    [c.world_from_camera for c in cameras[:5]], masks=masks[:5])  # fmt: skip
+    assert np.array_equal(default, depth)
+    # The LSM's: every pixel predicted, the box's within the network's error.
     learnt = mvgrasp.predict_depth(images[:5], [c.k for c in cameras[:5]],
-                                   [c.world_from_camera for c in cameras[:5]], masks=masks[:5])  # fmt: skip
+                                   [c.world_from_camera for c in cameras[:5]], masks=masks[:5],
+                                   depth_from="lsm")  # fmt: skip
     assert learnt.shape == depth.shape and (learnt[0][masks[0]] > 0).all()
     assert np.median(np.abs(learnt[0][masks[0]] - truth[masks[0]])) < 0.02
-    # One view: the LSM alone (its grid centred on the camera's axis); the baseline needs two.
+    # The multi-view stereo network's: every box pixel predicted.
+    stereo = mvgrasp.predict_depth(images[:5], [c.k for c in cameras[:5]],
+                                   [c.world_from_camera for c in cameras[:5]], masks=masks[:5],
+                                   depth_from="mvs")  # fmt: skip
+    assert stereo.shape == depth.shape and (stereo[0][masks[0]] > 0).all()
+    # One view: the LSM alone (its grid centred on the camera's axis); the others need two.
     one = mvgrasp.predict_depth(images[:1], [cameras[0].k], [cameras[0].world_from_camera],
-                                masks=masks[:1])  # fmt: skip
+                                masks=masks[:1], depth_from="lsm")  # fmt: skip
     assert one.shape == (1, *depth.shape[1:]) and (one[0][masks[0]] > 0).all()
     with pytest.raises(mvgrasp.PlanningError, match="stereo needs at least 2"):
         mvgrasp.predict_depth(images[:1], [cameras[0].k], [cameras[0].world_from_camera],

@@ -1,18 +1,20 @@
 //! `plan`: the main job. With no arguments it rests the built-in default object (a procedural
-//! mug) on a table in its most probable stable pose, renders its depth from a top-down camera
-//! 0.7 m above it, plans a grasp with the shipped GQ-CNN, lifts it to the world, and checks it
-//! analytically (robust Ferrari-Canny, collision) and in physics (rapier: close, lift, shake).
-//! `--model gqcnn_small_multiview` plans with the multi-view GQ-CNN in the seed paper's 10 test
-//! views (the first top-down) and returns the best over all of them. The default is the one
-//! whose grasps held most often in physics (models/README.md).
+//! mug) on a table in its most probable stable pose, renders 5 colour views of it (the first
+//! top-down) 0.7 m away, predicts their depth from the colour images alone
+//! (`DepthFrom::DEFAULT`: the predictor whose grasps held most often on held-out objects),
+//! plans a grasp with the shipped top-down GQ-CNN in the top-down view, lifts it to the world,
+//! and checks it analytically (robust Ferrari-Canny, collision) and in physics (rapier: close,
+//! lift, shake); the same run on the rendered (true) depth is printed beside it. `--out DIR`
+//! writes `grasps.json`, the overlays, the MCAP log and `views.png` (the colour views above
+//! their predicted depth, the best grasps drawn in every view). `--depth-from rendered` plans
+//! on a depth camera's view instead (one top-down view 0.7 m away), `--fuse` with the
+//! multi-view planner, `--depth-from mvs|lsm|baseline` with another predictor.
 //!
 //! `--depth FILE --intrinsics FILE [--camera-pose FILE] [--mask FILE]` plans on a sensor's
 //! depth image instead: the table is fitted in the image (the world is put on it when the
 //! camera's pose is not given), the object is the mask's pixels or what stands on the table,
-//! and nothing is simulated (there is no mesh).
-//!
-//! Rendered depth stands in for RGB today; the Learnt Stereo Machine's depth from RGB takes
-//! its place when it lands.
+//! and nothing is simulated (there is no mesh). `--rgb DIR` plans on a folder of RGB views
+//! with their cameras.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -107,12 +109,13 @@ struct Args {
     /// then the multi-view planner (`--fuse` implied).
     #[arg(long, conflicts_with_all = ["depth", "mesh", "views", "distance_m", "stable_pose", "views_dir"])]
     rgb: Option<PathBuf>,
-    /// How the depth planned on is made: `lsm`, predicted from RGB views by the shipped Learnt
-    /// Stereo Machine (at least 2 views); `baseline`, predicted by the classical plane sweep
-    /// inside the masks' visual hull; or, for a built-in object or a mesh, `rendered` (true
-    /// depth). Default `lsm`: on a mesh the views are rendered in colour (random colours), their
-    /// depth predicted, the multi-view planner plans on it (`--fuse` implied), and the summary
-    /// also gives the same run on the rendered depth.
+    /// How the depth planned on is made from RGB views (at least 2): `baseline`, the classical
+    /// plane sweep inside the masks' visual hull (the default: its depth gave the grasps that
+    /// held most often); `mvs`, the shipped multi-view stereo network; `lsm`, the shipped Learnt
+    /// Stereo Machine; or, for a built-in object or a mesh, `rendered` (true depth, a depth
+    /// camera). On a mesh the views are rendered in colour (random colours), their depth
+    /// predicted, the top-down GQ-CNN plans in the top-down one (`--fuse`: the multi-view
+    /// planner in all), and the summary also gives the same run on the rendered depth.
     #[arg(long, conflicts_with_all = ["depth", "views_dir"])]
     depth_from: Option<String>,
     /// Write `grasps.json` (the ranked grasps with their poses; README, "grasps.json") and, for

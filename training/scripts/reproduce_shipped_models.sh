@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # Reproduces the shipped networks of models/ from a clean clone: the grasp and RGB-D datasets
-# they were trained on (training/configs/datasets/, `render`), the three training runs
+# they were trained on (training/configs/datasets/, `render`), the four training runs
 # (training/configs/), the exports copied into models/ and the torch-parity fixtures of the
 # Rust tests rewritten, then the fused planner's ranker (training/scripts/fit_ranker.py).
 #
-#   training/scripts/reproduce_shipped_models.sh            # about four hours on a 2-core CPU
+#   training/scripts/reproduce_shipped_models.sh            # about five hours on a 2-core CPU
 #   QUICK=1 training/scripts/reproduce_shipped_models.sh    # minutes: 1 object per category,
 #                                                           # 1 epoch, into a scratch folder;
 #                                                           # models/ is left alone
@@ -105,6 +105,14 @@ sed "${edits[@]}" training/configs/lsm_small.toml > "$config"
     --export "$runs/lsm_small/lsm_small" > "$runs/lsm_small.log" 2>&1 \
     || { echo "training lsm_small failed: see $runs/lsm_small.log" >&2; exit 1; }
 
+# The learned multi-view stereo network on the same RGB-D dataset (about an hour here on its
+# own), exported for the Rust runtime.
+config=$runs/mvs_small.toml
+sed "${edits[@]}" training/configs/mvs_small.toml > "$config"
+"$python" -m mvgrasp_training.train_mvs "$config" --out "$runs/mvs_small" \
+    --export "$runs/mvs_small/mvs_small" > "$runs/mvs_small.log" 2>&1 \
+    || { echo "training mvs_small failed: see $runs/mvs_small.log" >&2; exit 1; }
+
 ranker_out=$runs/ranker_fused.json
 if [[ $quick != 1 ]]; then
     for name in gqcnn_small_topdown gqcnn_small_multiview; do
@@ -113,6 +121,8 @@ if [[ $quick != 1 ]]; then
     done
     cp "$runs/lsm_small/lsm_small.json" "$runs/lsm_small/lsm_small.safetensors" models/
     cp "$runs/lsm_small/learning_curve.png" models/lsm_small.png
+    cp "$runs/mvs_small/mvs_small.json" "$runs/mvs_small/mvs_small.safetensors" models/
+    cp "$runs/mvs_small/learning_curve.png" models/mvs_small.png
     "$python" training/scripts/make_parity_fixtures.py
     ranker_out=models/ranker_fused.json
 fi

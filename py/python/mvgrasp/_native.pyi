@@ -354,7 +354,7 @@ def plan_mesh(
     depth_from: str = "rendered",
 ) -> dict[str, Any]:
     """Plans a grasp on a mesh as ``plan --mesh --depth-from DEPTH_FROM`` does (rest, render,
-    predict depth from the colour views with ``"lsm"`` or ``"baseline"``, plan, check); returns
+    predict depth from the colour views with ``"baseline"``, ``"mvs"`` or ``"lsm"``, plan, check); returns
     ``{"report", "grasps_json", "timings"}``: ``plan --json``'s plan report, the text of
     ``grasps.json`` and each stage's seconds. ``ValueError`` for a bad option value,
     ``CameraError`` for an unknown camera preset, ``RenderError``, ``WeightsError``."""
@@ -464,14 +464,15 @@ def plan_rgb(
     *,
     masks: Sequence[npt.NDArray[np.bool_] | None] | None = None,
     model: str | None = None,
-    depth_from: str = "lsm",
+    depth_from: str = "baseline",
     cem: bool = False,
     hand_check: bool = True,
     seed: int = 0,
     as_json: bool = False,
 ) -> Any:
-    """Plans a grasp on RGB views as ``plan --rgb`` does: depth predicted by the shipped Learnt
-    Stereo Machine (``depth_from="lsm"``) or the plane-sweep baseline (``"baseline"``), then
+    """Plans a grasp on RGB views as ``plan --rgb`` does: depth predicted by the plane-sweep
+    baseline (``depth_from="baseline"``, the default), the shipped multi-view stereo network
+    (``"mvs"``) or the shipped Learnt Stereo Machine (``"lsm"``), then
     the multi-view planner. ``images``: ``(H, W, 3)`` uint8 per view, with their
     3x3 camera matrices and 4x4 poses in the table frame; ``masks``: the object's pixels or
     ``None`` per view. Returns ``grasps.json``'s content (with ``as_json``, its text)."""
@@ -487,8 +488,8 @@ def predict_depth(
     world_from_cameras: Sequence[npt.NDArray[np.float64]],
     *,
     masks: Sequence[npt.NDArray[np.bool_] | None] | None = None,
-    depth_from: str = "lsm",
+    depth_from: str = "baseline",
 ) -> npt.NDArray[np.float32]:
-    """Each RGB view's depth predicted from all of them as ``plan --rgb`` predicts it (``"lsm"``
-    or ``"baseline"``): (V, H, W)
-    float32 metres, 0 where unknown. The inputs are ``plan_rgb``'s; the LSM also takes one view."""
+    """Each RGB view's depth predicted from all of them as ``plan --rgb`` predicts it
+    (``"baseline"``, ``"mvs"`` or ``"lsm"``): (V, H, W) float32 metres, 0 where unknown. The
+    inputs are ``plan_rgb``'s; the LSM also takes one view (the others need two)."""

@@ -243,12 +243,13 @@ class Planner:
         cameras: Sequence[Camera],
         *,
         masks: Optional[Sequence[Optional[npt.ArrayLike]]] = None,
-        depth_from: str = "lsm",
+        depth_from: str = "baseline",
     ) -> PlanResult:
         """Plans on RGB views (``(H, W, 3)`` uint8, at least two) with their posed cameras (the
         table frame: z up, the table at z = 0), as ``plan --rgb`` does: the views' depth
-        predicted by the shipped Learnt Stereo Machine (``depth_from="lsm"``) or the classical
-        baseline (``"baseline"``: silhouette carving and a plane sweep), then the multi-view planner
+        predicted by the classical baseline (``depth_from="baseline"``, the default: silhouette
+        carving and a plane sweep), the shipped multi-view stereo network (``"mvs"``) or the
+        shipped Learnt Stereo Machine (``"lsm"``), then the multi-view planner
         (``fuse`` is implied). ``masks``: per view the object's pixels, or ``None``."""
         started = time.perf_counter()
         options = self._options()
@@ -278,9 +279,10 @@ class Planner:
     ) -> PlanResult:
         """Plans on a mesh as ``plan --mesh --depth-from DEPTH_FROM`` does: rests it on the
         table in a stable pose, renders the views' depth (``"rendered"``, the default here) or
-        renders them in colour and predicts their depth (``"lsm"``, the CLI's default, or
-        ``"baseline"``: 5 views unless ``views`` says otherwise, the top-down GQ-CNN planning in
-        the first, top-down one, or the multi-view planner in all with ``fuse=True``), plans, and
+        renders them in colour and predicts their depth (``"baseline"``, the CLI's default,
+        ``"mvs"`` or ``"lsm"``: 5 views unless ``views`` says otherwise, the top-down GQ-CNN
+        planning in the first, top-down one, or the multi-view planner in all with
+        ``fuse=True``), plans, and
         checks the best grasp analytically and (with ``physics``) in the rapier trial
         (:attr:`PlanResult.physics`). Timings per stage."""
         started = time.perf_counter()
