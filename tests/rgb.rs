@@ -14,8 +14,8 @@ use mvgrasp::mvs::mvs_depths;
 use mvgrasp::planner::{DepthFrom, DepthPredictor};
 
 /// The shipped MVS network's median error on a box's top-down view must stay under this
-/// (README, "Depth from RGB": measured on unseen objects).
-const MVS_TOP_DOWN_MEDIAN_M: f32 = 0.005;
+/// (README, "Depth from RGB views": a median of 14 mm on unseen objects, top-down, 5 views).
+const MVS_TOP_DOWN_MEDIAN_M: f32 = 0.02;
 use mvgrasp::stereo::{SweepParams, sweep_depths};
 
 fn plan_rgb(dir: &Path, extra: &[&str]) -> std::process::Output {

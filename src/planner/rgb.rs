@@ -162,7 +162,9 @@ pub enum DepthPredictor {
 }
 
 /// The shipped multi-view stereo network's confidence threshold: pixels below it are left
-/// missing (unseen space for the planner).
+/// missing (unseen space for the planner). 0, every pixel kept: the shipped network's
+/// confidence is not calibrated (of the object pixels it gives 0.9 or more, 28% are within
+/// 5 mm; README, "Depth from RGB views").
 pub const MVS_MIN_CONFIDENCE: f32 = 0.0;
 
 impl PartialEq for DepthPredictor {
