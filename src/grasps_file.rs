@@ -228,20 +228,8 @@ pub fn write_overlay(
     grasps: &[ScoredGrasp],
 ) -> Result<()> {
     let (w, h) = (depth.width() as usize, depth.height() as usize);
-    let mut valid: Vec<f32> = depth
-        .as_slice()
-        .iter()
-        .copied()
-        .filter(|&d| d > 0.0)
-        .collect();
-    valid.sort_by(f32::total_cmp);
-    let at = |q: f64| {
-        valid
-            .get(((valid.len().saturating_sub(1)) as f64 * q) as usize)
-            .copied()
-    };
-    let (near, far) = (at(0.02).unwrap_or(0.0), at(0.98).unwrap_or(1.0));
-    let span = (far - near).max(1e-3);
+    let (near, far) = depth_span(depth.as_slice());
+    let span = far - near;
     let mut rgb: Vec<u8> = depth
         .as_slice()
         .iter()

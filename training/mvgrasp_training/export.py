@@ -95,16 +95,19 @@ def load_gqcnn(path: str | Path) -> tuple[GQCNN, dict[str, Any]]:
 
 
 LSM_FORMAT = "mvgrasp-lsm/1"
+MVS_FORMAT = "mvgrasp-mvs/1"
 
 
-def export_lsm(net: LSM, stem: str | Path, training: dict[str, Any] | None = None) -> Path:
-    """Writes an LSM's ``stem.safetensors`` (its state dict, float32) and ``stem.json`` (format,
-    architecture, tensor shapes, what the caller records about training) for the Rust runtime
-    (``mvgrasp_infer::Lsm``); returns the JSON's path."""
+def _export_depth_network(
+    net: LSM | MVS, stem: str | Path, format_tag: str, training: dict[str, Any] | None
+) -> Path:
+    """Writes a depth network's ``stem.safetensors`` (its state dict, float32) and
+    ``stem.json`` (format, architecture, tensor shapes, what the caller records about
+    training); returns the JSON's path."""
     stem = Path(stem)
     tensors, weights = _save_weights(net, stem)
     description = {
-        "format": LSM_FORMAT,
+        "format": format_tag,
         "weights": weights.name,
         "architecture": asdict(net.arch),
         "tensors": {k: list(v.shape) for k, v in sorted(tensors.items())},
@@ -113,6 +116,32 @@ def export_lsm(net: LSM, stem: str | Path, training: dict[str, Any] | None = Non
     path = stem.with_suffix(".json")
     path.write_text(json.dumps(description, indent=2) + "\n")
     return path
+
+
+def _load_depth_network(path: str | Path, format_tag: str, build) -> tuple[Any, dict[str, Any]]:
+    """Reads a depth network's export back into torch with ``build(architecture dict)``: the
+    network (eval mode) and its description.
+
+    Raises:
+        ValueError: the JSON is not an export of ``format_tag``, or its weights do not fit the
+            architecture.
+    """
+    path = Path(path)
+    description = json.loads(path.read_text())
+    if description.get("format") != format_tag:
+        raise ValueError(f"{path}: format {description.get('format')!r}, expected {format_tag!r}")
+    net = build(description["architecture"])
+    try:
+        net.load_state_dict(load_file(str(path.parent / description["weights"])))
+    except RuntimeError as e:
+        raise ValueError(f"{path}: weights do not fit the architecture: {e}") from e
+    return net.eval(), description
+
+
+def export_lsm(net: LSM, stem: str | Path, training: dict[str, Any] | None = None) -> Path:
+    """Writes an LSM's ``stem.safetensors`` and ``stem.json`` for the Rust runtime
+    (``mvgrasp_infer::Lsm``); returns the JSON's path."""
+    return _export_depth_network(net, stem, LSM_FORMAT, training)
 
 
 def load_lsm(path: str | Path) -> tuple[LSM, dict[str, Any]]:
@@ -121,37 +150,13 @@ def load_lsm(path: str | Path) -> tuple[LSM, dict[str, Any]]:
     Raises:
         ValueError: the JSON is not an LSM export, or its weights do not fit the architecture.
     """
-    path = Path(path)
-    description = json.loads(path.read_text())
-    if description.get("format") != LSM_FORMAT:
-        raise ValueError(f"{path}: format {description.get('format')!r}, expected {LSM_FORMAT!r}")
-    net = LSM(LsmArchitecture(**description["architecture"]))
-    try:
-        net.load_state_dict(load_file(str(path.parent / description["weights"])))
-    except RuntimeError as e:
-        raise ValueError(f"{path}: weights do not fit the architecture: {e}") from e
-    return net.eval(), description
-
-
-MVS_FORMAT = "mvgrasp-mvs/1"
+    return _load_depth_network(path, LSM_FORMAT, lambda arch: LSM(LsmArchitecture(**arch)))
 
 
 def export_mvs(net: MVS, stem: str | Path, training: dict[str, Any] | None = None) -> Path:
-    """Writes the multi-view stereo network's ``stem.safetensors`` and ``stem.json`` (format,
-    architecture, tensor shapes, the training report) for the Rust runtime
-    (``mvgrasp_infer::Mvs``); returns the JSON's path."""
-    stem = Path(stem)
-    tensors, weights = _save_weights(net, stem)
-    description = {
-        "format": MVS_FORMAT,
-        "weights": weights.name,
-        "architecture": asdict(net.arch),
-        "tensors": {k: list(v.shape) for k, v in sorted(tensors.items())},
-        "training": training or {},
-    }
-    path = stem.with_suffix(".json")
-    path.write_text(json.dumps(description, indent=2) + "\n")
-    return path
+    """Writes the multi-view stereo network's ``stem.safetensors`` and ``stem.json`` for the
+    Rust runtime (``mvgrasp_infer::Mvs``); returns the JSON's path."""
+    return _export_depth_network(net, stem, MVS_FORMAT, training)
 
 
 def load_mvs(path: str | Path) -> tuple[MVS, dict[str, Any]]:
@@ -161,13 +166,4 @@ def load_mvs(path: str | Path) -> tuple[MVS, dict[str, Any]]:
     Raises:
         ValueError: the JSON is not such an export, or its weights do not fit the architecture.
     """
-    path = Path(path)
-    description = json.loads(path.read_text())
-    if description.get("format") != MVS_FORMAT:
-        raise ValueError(f"{path}: format {description.get('format')!r}, expected {MVS_FORMAT!r}")
-    net = MVS(MvsArchitecture(**description["architecture"]))
-    try:
-        net.load_state_dict(load_file(str(path.parent / description["weights"])))
-    except RuntimeError as e:
-        raise ValueError(f"{path}: weights do not fit the architecture: {e}") from e
-    return net.eval(), description
+    return _load_depth_network(path, MVS_FORMAT, lambda arch: MVS(MvsArchitecture(**arch)))
