@@ -107,7 +107,7 @@ fn plan_json_on_depth_from_rgb_is_deterministic_and_carries_the_true_depth_run()
     );
     assert_eq!(a.stdout, b.stdout, "the same seed gives the same bytes");
     let report: serde_json::Value = serde_json::from_slice(&a.stdout).unwrap();
-    assert_eq!(report["depth_from"], "lsm");
+    assert_eq!(report["depth_from"], "baseline");
     assert_eq!(report["plan"]["views"].as_array().unwrap().len(), 5);
     let truth = &report["on_rendered_depth"];
     assert_eq!(truth["views"].as_array().unwrap().len(), 5);
@@ -115,8 +115,8 @@ fn plan_json_on_depth_from_rgb_is_deterministic_and_carries_the_true_depth_run()
         truth["cameras"], report["plan"]["cameras"],
         "the same views"
     );
-    // The baseline instead, and what --depth-from refuses.
-    let baseline = plan(&[
+    // The multi-view stereo network instead, and what --depth-from refuses.
+    let mvs = plan(&[
         "--json",
         "--category",
         "can",
@@ -124,10 +124,10 @@ fn plan_json_on_depth_from_rgb_is_deterministic_and_carries_the_true_depth_run()
         "1",
         "--no-physics",
         "--depth-from",
-        "baseline",
+        "mvs",
     ]);
-    let report: serde_json::Value = serde_json::from_slice(&baseline.stdout).unwrap();
-    assert_eq!(report["depth_from"], "baseline");
+    let report: serde_json::Value = serde_json::from_slice(&mvs.stdout).unwrap();
+    assert_eq!(report["depth_from"], "mvs");
     for (args, says) in [
         (
             &["--depth-from", "stereo"][..],
