@@ -12,6 +12,7 @@ from mvgrasp_training.config import (
     DataConfig,
     ExperimentConfig,
     LsmExperimentConfig,
+    MvsExperimentConfig,
     TrainConfig,
     load_config,
 )
@@ -61,8 +62,12 @@ def test_example_loads() -> None:
 
 @pytest.mark.parametrize("path", sorted(CONFIGS.glob("*.toml")), ids=lambda p: p.name)
 def test_every_shipped_config_loads(path: Path) -> None:
-    # The LSM's configs (lsm_*.toml) are of their own kind.
-    load_config(path, LsmExperimentConfig if path.name.startswith("lsm_") else ExperimentConfig)
+    # The depth networks' configs (lsm_*.toml, mvs_*.toml) are of their own kinds.
+    kinds = {"lsm_": LsmExperimentConfig, "mvs_": MvsExperimentConfig}
+    kind = next(
+        (k for prefix, k in kinds.items() if path.name.startswith(prefix)), ExperimentConfig
+    )
+    load_config(path, kind)
 
 
 def test_valid_config_with_defaults(tmp_path: Path) -> None:
