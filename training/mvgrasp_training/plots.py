@@ -42,9 +42,9 @@ def plot_history(history: list[dict[str, Any]], path: str | Path, title: str = "
 
 
 def plot_lsm_history(history: list[dict[str, Any]], path: str | Path, title: str = "") -> Path:
-    """Writes an LSM run's curve to ``path`` (a PNG): the training L1 and the validation mean
-    absolute depth error over the held-out objects' pixels and over all pixels in the grid's
-    range, millimetres per epoch; returns the path."""
+    """Writes a depth network's curve to ``path`` (a PNG): the training L1 (where the history
+    has it) and the validation mean absolute depth error over the held-out objects' pixels and
+    over all pixels in range, millimetres per epoch; returns the path."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -57,7 +57,10 @@ def plot_lsm_history(history: list[dict[str, Any]], path: str | Path, title: str
         ("object_mm", "validation MAE, object pixels"),
         ("all_mm", "validation MAE, all pixels in range"),
     ):
-        ax.plot(epochs, [h.get(key) for h in history], marker="o", markersize=3, label=label)
+        # A run that records no such figure (the MVS network's training loss is not a depth
+        # error) draws no line for it.
+        if any(key in h for h in history):
+            ax.plot(epochs, [h.get(key) for h in history], marker="o", markersize=3, label=label)
     ax.set_xlabel("epoch")
     ax.set_ylabel("depth error (mm)")
     ax.grid(alpha=0.3)

@@ -281,11 +281,7 @@ def export_best(config: MvsExperimentConfig, out: Path, stem: Path) -> Path:
         "history": history,
         "date": time.strftime("%Y-%m-%d"),
     }
-    plot_lsm_history(
-        [{**r, "train_l1_mm": r["train_loss"]} for r in history],
-        out / "learning_curve.png",
-        title=config.name,
-    )
+    plot_lsm_history(history, out / "learning_curve.png", title=config.name)
     return export_mvs(net, stem, report)
 
 
