@@ -52,6 +52,10 @@ struct Args {
     /// The shared mesh folder (skipped when absent).
     #[arg(long, default_value = "../shared/data/meshes")]
     data: PathBuf,
+    /// Every real mesh of the shared folder: the two YCB boxes and the mug URDF too, and the
+    /// 40 household objects of `household/manifest.json`.
+    #[arg(long)]
+    every_real_mesh: bool,
     /// Distance of the multi-view policies' cameras, metres (`plan`'s: 0.65; the paper's test
     /// views: 0.5).
     #[arg(long, default_value_t = 0.65)]
@@ -285,6 +289,29 @@ fn main() -> ExitCode {
     mvgrasp::cli::exit(run(&Args::parse()))
 }
 
+/// The household set's mesh files, relative to the shared mesh folder (none when the folder
+/// has no manifest).
+fn household_meshes(data: &std::path::Path) -> Result<Vec<String>, String> {
+    let path = data.join("household/manifest.json");
+    let Ok(text) = std::fs::read_to_string(&path) else {
+        return Ok(Vec::new());
+    };
+    let manifest: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+    let objects = manifest["objects"]
+        .as_array()
+        .ok_or_else(|| format!("{}: no \"objects\" list", path.display()))?;
+    objects
+        .iter()
+        .map(|o| {
+            o["file"]
+                .as_str()
+                .map(|f| format!("household/{f}"))
+                .ok_or_else(|| format!("{}: an object without \"file\"", path.display()))
+        })
+        .collect()
+}
+
 fn run(args: &Args) -> Result<(), String> {
     // (name, group, mesh): the group is the category, or "real meshes".
     let mut objects: Vec<(String, &'static str, TriangleMesh)> = Vec::new();
@@ -294,12 +321,24 @@ fn run(args: &Args) -> Result<(), String> {
             objects.push((o.name, category.name(), o.mesh));
         }
     }
-    // The two YCB boxes have no Panda grasp (see REAL_MESHES); the pybullet mug's URDF has a
-    // handle that the physics hull fills, so it is left to grasp_eval.
-    for m in &REAL_MESHES[2..11] {
+    // By default the two YCB boxes are left out (no Panda grasp, see REAL_MESHES) and the
+    // pybullet mug's URDF (its handle filled by the physics hull) to grasp_eval;
+    // --every-real-mesh takes them and the household set too.
+    let mut real: Vec<String> = if args.every_real_mesh {
+        REAL_MESHES.iter().map(|m| (*m).to_string()).collect()
+    } else {
+        REAL_MESHES[2..11]
+            .iter()
+            .map(|m| (*m).to_string())
+            .collect()
+    };
+    if args.every_real_mesh {
+        real.extend(household_meshes(&args.data)?);
+    }
+    for m in &real {
         let path = args.data.join(m);
         if path.is_file() {
-            let mesh = load_mesh(&path).map_err(|e| e.to_string())?;
+            let mesh = load_mesh(&path).map_err(|e| format!("{}: {e}", path.display()))?;
             let name = m.rsplit('/').next().unwrap_or(m).to_string();
             objects.push((name, "real meshes", mesh));
         }

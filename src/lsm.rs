@@ -46,6 +46,21 @@ pub fn lsm_depths(lsm: &Lsm, views: &[RgbView]) -> Result<Vec<Vec<f32>>> {
     at_camera_resolution(views, predicted.data(), aw, ah)
 }
 
+/// One network map of `width` x `height` resized bilinearly to `camera`'s image.
+///
+/// # Errors
+/// Only for a map that does not hold `width` x `height` values.
+pub(crate) fn to_camera_size(
+    map: &[f32],
+    width: usize,
+    height: usize,
+    camera: &mvgrasp_geometry::Camera,
+) -> Result<Vec<f32>> {
+    let k = &camera.intrinsics;
+    let small = Tensor::new(&[1, 1, height, width], map.to_vec())?;
+    Ok(resize_bilinear(&small, k.height as usize, k.width as usize)?.into_data())
+}
+
 /// The networks' inputs of RGB views: colours to `[0, 1]`, each image area-averaged to
 /// `width` x `height` (`[V, 3, height, width]`), and the cameras with their intrinsics scaled to
 /// match, posed in the table frame.
@@ -97,10 +112,7 @@ pub(crate) fn at_camera_resolution(
         .iter()
         .zip(maps.chunks_exact(width * height))
         .map(|(view, depth)| {
-            let k = &view.camera.intrinsics;
-            let (w, h) = (k.width as usize, k.height as usize);
-            let small = Tensor::new(&[1, 1, height, width], depth.to_vec())?;
-            let mut depth = resize_bilinear(&small, h, w)?.into_data();
+            let mut depth = to_camera_size(depth, width, height, &view.camera)?;
             if let Some(mask) = &view.mask {
                 let table = table_depth(&view.camera);
                 for ((d, &on_object), t) in depth.iter_mut().zip(mask).zip(table) {

@@ -16,7 +16,7 @@ use mvgrasp_infer::ops::resize_area;
 use mvgrasp_infer::{Mvs, Tensor};
 
 use crate::error::{Error, Result};
-use crate::lsm::{at_camera_resolution, network_inputs};
+use crate::lsm::{network_inputs, to_camera_size};
 use crate::stereo::{RgbView, table_depth};
 
 /// One view's prediction at its camera's resolution.
@@ -52,19 +52,12 @@ pub fn mvs_depths(mvs: &Mvs, views: &[RgbView], min_confidence: f32) -> Result<V
         .zip(predicted.depth.data().chunks_exact(aw * ah))
         .map(|(view, depth)| on_object_resolution(view, depth, aw, ah))
         .collect::<Result<Vec<_>>>()?;
-    let unmasked: Vec<RgbView> = views
+    views
         .iter()
-        .map(|view| RgbView {
-            camera: view.camera,
-            rgb: Vec::new(),
-            mask: None,
-        })
-        .collect();
-    let confidences = at_camera_resolution(&unmasked, predicted.confidence.data(), aw, ah)?;
-    Ok(views
-        .iter()
-        .zip(depths.into_iter().zip(confidences))
-        .map(|(view, (mut depth_m, mut confidence))| {
+        .zip(depths)
+        .zip(predicted.confidence.data().chunks_exact(aw * ah))
+        .map(|((view, mut depth_m), confidence)| {
+            let mut confidence = to_camera_size(confidence, aw, ah, &view.camera)?;
             let on_object = |i: usize| view.mask.as_ref().is_none_or(|mask| mask[i]);
             for (i, (d, c)) in depth_m.iter_mut().zip(&mut confidence).enumerate() {
                 if !on_object(i) {
@@ -73,12 +66,12 @@ pub fn mvs_depths(mvs: &Mvs, views: &[RgbView], min_confidence: f32) -> Result<V
                     *d = 0.0;
                 }
             }
-            MvsView {
+            Ok(MvsView {
                 depth_m,
                 confidence,
-            }
+            })
         })
-        .collect())
+        .collect()
 }
 
 /// One view's network depth (`width` x `height`) at its camera's resolution: bilinear, as
@@ -95,9 +88,7 @@ fn on_object_resolution(
     let k = &view.camera.intrinsics;
     let (w, h) = (k.width as usize, k.height as usize);
     let Some(mask) = &view.mask else {
-        return Ok(
-            at_camera_resolution(std::slice::from_ref(view), depth, width, height)?.swap_remove(0),
-        );
+        return to_camera_size(depth, width, height, &view.camera);
     };
     let coverage: Vec<f32> = mask.iter().map(|&m| f32::from(u8::from(m))).collect();
     let coverage = resize_area(&Tensor::new(&[1, 1, h, w], coverage)?, height, width)?;
@@ -149,6 +140,7 @@ mod tests {
     use mvgrasp_geometry::{Camera, Intrinsics, IntrinsicsPreset, Vec3};
 
     use super::*;
+    use crate::lsm::at_camera_resolution;
 
     #[test]
     fn an_object_pixel_at_the_edge_takes_the_object_depth_not_the_table_behind_it() {
