@@ -1,33 +1,41 @@
 //! Depth from calibrated RGB views without learning: the classical baseline that the Learnt
-//! Stereo Machine is measured against.
+//! Stereo Machine is measured against, and the depth the default run plans on.
 //!
-//! Silhouette carving, then a plane sweep inside the hull ([`sweep_depths`]):
+//! Silhouette carving, then a plane sweep inside the hull, then a consistency check across the
+//! views ([`sweep_depths`]):
 //!
 //! 1. **Planes.** Each reference view sweeps `planes` fronto-parallel planes (uniform in
 //!    inverse depth) over the depths where its object pixels' rays cross the workspace: the
-//!    slab from the table (world z = 0) up to `max_height_m`.
-//! 2. **Photo-consistency.** A pixel's point on a plane is projected into every other view; its
-//!    cost there is the mean absolute RGB difference to the reference pixel (bilinear, 0 to
-//!    255). The pixel's cost on the plane is the mean of its `best_views` smallest costs, so
-//!    that views which do not see the point (occluded) do not count, then averaged over a
-//!    `(2 r + 1)^2` window in the reference image (the random vertex and face colours of the
-//!    datasets give every window texture).
+//!    slab from the table (world z = 0) up to `max_height_m`, within `reach_m` of the depth of
+//!    the point the cameras look at.
+//! 2. **Photo-consistency.** Each pixel's point on a plane is projected into every other view.
+//!    A view's cost for the pixel is one minus the zero-mean normalised cross-correlation of
+//!    the reference's `(2 r + 1)^2` window around it with the colours that view shows at the
+//!    window's points (bilinear; the three channels together): the correlation forgives the
+//!    gain and offset that shading puts on one surface seen from two directions (the renderer's
+//!    light moves with its camera; a real lamp lights a face differently for each lens). The
+//!    pixel's cost on the plane is the mean of its `best_views` smallest costs, so that views
+//!    which do not see the point (occluded) do not count.
 //! 3. **Carving.** With masks, a point that projects outside the object's mask of any view that
 //!    has it in its image is not on the object: the plane is ruled out for that pixel. The
 //!    nearest plane that survives is the visual hull's depth ([`SweptDepth::hull_m`]).
 //! 4. **Winner.** Each object pixel takes its cheapest plane, refined between its neighbours by
 //!    a parabola; a winner costing more than `max_cost` is left missing (0). Without a mask
 //!    every pixel is swept; with one, the others see the table plane (`table`) or nothing.
+//! 5. **Consistency** ([`consistency`]). A winner that no other view's depth confirms (or that
+//!    more views see through than confirm) is a guess: with masks it takes the visual hull's
+//!    depth, which never lies beyond the surface (`hull_where_unconfirmed`), else it is left
+//!    missing.
 //!
 //! Colours are compared after a 3 x 3 binomial blur: the datasets' random face colours change
 //! from one pixel to the next and alias differently in each view.
 //!
-//! Limits, measured on a textured box seen by 5 views 0.5 m away (the unit test): from above,
-//! every top pixel to 0.13 mm (median); from 48 to 58 degrees up, 55 to 97% of the object's
-//! pixels to about 0.5 mm; from 19 to 27 degrees up, 41 to 44% to 2 to 2.5 mm. A face that
-//! only one other view sees has no second view to agree and is left missing, and a face seen
-//! at a grazing angle aliases. Missing is what the planner's fused model treats as unknown
-//! space, which the hand may not enter.
+//! Limits, measured on a textured box seen by 5 views 0.5 m away (the unit test, which prints
+//! them): from above, every top pixel to about 0.1 mm (median); from the side, the faces that
+//! a second view confirms to a millimetre or two, the rest at the hull's depth. A face that
+//! only one view sees has no second view to confirm it (the inside of a cup seen from above),
+//! and a face seen at a grazing angle aliases. Missing is what the planner's fused model
+//! treats as unknown space, which the hand may not enter.
 //!
 //! The cameras' world must be the table frame (z up, the table at z = 0), as `render` writes
 //! them; every view needs its pose.
@@ -36,6 +44,10 @@ use mvgrasp_geometry::{Camera, Vec3};
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
+
+mod consistency;
+
+pub use consistency::{Consistency, consistent_pixels};
 
 /// One calibrated RGB view.
 #[derive(Clone, Debug)]
@@ -59,14 +71,20 @@ pub struct SweepParams {
     pub best_views: usize,
     /// The workspace's height above the table, metres.
     pub max_height_m: f32,
-    /// A winning plane costing more than this (mean absolute RGB difference, 0 to 255) leaves
-    /// the pixel missing.
+    /// A winning plane costing more than this (one minus the correlation, 0 to 2) leaves the
+    /// pixel missing.
     pub max_cost: f32,
     /// With masks: pixels off the object get the table plane's depth (else nothing).
     pub table: bool,
-    /// Without masks: the depths swept stay within this distance of the depth of the point the
-    /// cameras look at (the least-squares point of their optical axes), metres.
+    /// The depths swept stay within this distance of the depth of the point the cameras look
+    /// at (the least-squares point of their optical axes), metres.
     pub reach_m: f32,
+    /// The multi-view consistency check of the swept depths ([`consistency`]); `None` keeps
+    /// every winner.
+    pub consistency: Option<Consistency>,
+    /// With masks: an object pixel whose depth fails the check takes the visual hull's depth
+    /// (never beyond the surface, so the hand keeps clear of it); else it is left missing.
+    pub hull_where_unconfirmed: bool,
 }
 
 impl Default for SweepParams {
@@ -76,9 +94,11 @@ impl Default for SweepParams {
             window_radius: 2,
             best_views: 2,
             max_height_m: 0.3,
-            max_cost: 30.0,
+            max_cost: 1.0,
             table: true,
             reach_m: 0.3,
+            consistency: Some(Consistency::default()),
+            hull_where_unconfirmed: true,
         }
     }
 }
@@ -102,12 +122,8 @@ const RULED_OUT: f32 = f32::INFINITY;
 /// camera's, or bad parameters.
 pub fn sweep_depths(views: &[RgbView], params: &SweepParams) -> Result<Vec<SweptDepth>> {
     check(views, params)?;
-    // Without masks, the depths swept are bounded around where the cameras look.
-    let look_at = views
-        .iter()
-        .any(|v| v.mask.is_none())
-        .then(|| look_at_point(views))
-        .flatten();
+    // The depths swept are bounded around where the cameras look.
+    let look_at = look_at_point(views);
     let smoothed: Vec<RgbView> = views
         .par_iter()
         .map(|view| RgbView {
@@ -116,10 +132,29 @@ pub fn sweep_depths(views: &[RgbView], params: &SweepParams) -> Result<Vec<Swept
             mask: view.mask.clone(),
         })
         .collect();
-    (0..views.len())
+    let mut swept: Vec<SweptDepth> = (0..views.len())
         .into_par_iter()
-        .map(|r| Ok(sweep_view(&smoothed, r, params, look_at)))
-        .collect()
+        .map(|r| sweep_view(&smoothed, r, params, look_at))
+        .collect();
+    if let Some(consistency) = &params.consistency {
+        let cameras: Vec<Camera> = views.iter().map(|v| v.camera).collect();
+        let depths: Vec<Vec<f32>> = swept.iter().map(|s| s.depth_m.clone()).collect();
+        let standing = consistent_pixels(&cameras, &depths, consistency);
+        for ((view, swept), standing) in views.iter().zip(&mut swept).zip(standing) {
+            for (i, depth) in swept.depth_m.iter_mut().enumerate() {
+                let object = view.mask.as_ref().is_none_or(|m| m[i]);
+                if object && *depth > 0.0 && !standing[i] {
+                    let hull = swept.hull_m[i];
+                    *depth = if params.hull_where_unconfirmed && hull > 0.0 {
+                        hull
+                    } else {
+                        0.0
+                    };
+                }
+            }
+        }
+    }
+    Ok(swept)
 }
 
 /// The image under a [1 2 1] x [1 2 1] / 16 binomial filter (the borders clamped): colours
@@ -175,13 +210,17 @@ fn check(views: &[RgbView], params: &SweepParams) -> Result<()> {
             return bad(format!("view {i}: the camera pose is not finite"));
         }
     }
+    let tolerances_ok = params
+        .consistency
+        .is_none_or(|c| c.tolerance_m >= 0.0 && c.relative_tolerance >= 0.0);
+    let positive = params.max_height_m > 0.0 && params.max_cost > 0.0 && params.reach_m > 0.0;
     if params.planes < 2
         || !(1..=MAX_BEST_VIEWS).contains(&params.best_views)
-        || !(params.max_height_m > 0.0 && params.max_cost > 0.0 && params.reach_m > 0.0)
+        || !(positive && tolerances_ok)
     {
         return bad(format!(
             "parameters {params:?}: need 2 or more planes, 1 to {MAX_BEST_VIEWS} best views, a \
-             positive height, cost and reach"
+             positive height, cost and reach, and tolerances of 0 or more"
         ));
     }
     Ok(())
@@ -390,9 +429,10 @@ fn sweep_view(
         }
     }
     // Without a mask every pixel's ray counts, and one that grazes the table plane would
-    // stretch the planes to kilometres: the depths stay within the workspace's reach around
-    // the point the cameras look at.
-    if let (None, Some(centre)) = (&reference.mask, look_at) {
+    // stretch the planes to kilometres; a camera lower than the workspace is tall would sweep
+    // from its near limit, too sparsely for the coarse pass to meet the object: the depths stay
+    // within the workspace's reach around the point the cameras look at.
+    if let Some(centre) = look_at {
         let depth = reference
             .camera
             .world_from_camera
@@ -437,14 +477,22 @@ fn sweep_view(
     let mut slices: [Vec<f32>; 3] = std::array::from_fn(|_| vec![RULED_OUT; n]);
     for p in 0..=params.planes {
         if let Some(&depth) = planes.get(p) {
-            let raw = plane_costs(reference, &rays, &targets, depth, sweep_box, best_views);
+            let raw = plane_costs(
+                reference,
+                &rays,
+                &targets,
+                depth,
+                sweep_box,
+                best_views,
+                params.window_radius,
+            );
             for (i, c) in raw.iter().enumerate() {
                 if c.is_finite() && hull[i] == usize::MAX {
                     hull[i] = p;
                 }
             }
             slices.rotate_left(1);
-            slices[2] = box_mean(&raw, bw, bh, params.window_radius);
+            slices[2] = raw;
         } else {
             slices.rotate_left(1);
             slices[2].fill(RULED_OUT);
@@ -559,7 +607,10 @@ fn plane_meets_hull(
 
 /// Each box pixel's cost on the plane at depth `d` ([`RULED_OUT`] when the point leaves a
 /// mask or no other view sees it): the mean of its `best_views` smallest costs in the other
-/// views.
+/// views, a view's cost being one minus the zero-mean normalised cross-correlation of the
+/// reference's window around the pixel with what that view shows of the window's points (the
+/// three channels together; [`window_costs`]). The correlation forgives the gain and offset
+/// that a light fixed to each camera puts on one surface seen from two of them.
 fn plane_costs(
     reference: &RgbView,
     rays: &Rays,
@@ -567,27 +618,55 @@ fn plane_costs(
     d: f32,
     area: (usize, usize, usize, usize),
     best_views: usize,
+    radius: usize,
 ) -> Vec<f32> {
-    (0..area.2 * area.3)
+    let (bw, bh) = (area.2, area.3);
+    let n = bw * bh;
+    // Per box pixel: the reference's colour (NaN off the object), whether a mask carves the
+    // point away, and each target's colour there (NaN where it does not see the point).
+    let sampled: Vec<([f32; 3], bool, Vec<[f32; 3]>)> = (0..n)
         .into_par_iter()
         .with_min_len(512)
         .map(|i| {
+            let mut colours = vec![[f32::NAN; 3]; targets.len()];
             let Some((image, point)) = box_point(reference, rays, d, area, i) else {
-                return RULED_OUT;
+                return ([f32::NAN; 3], false, colours);
             };
             let own = reference.rgb[image].map(f32::from);
-            // The smallest costs so far, ascending.
-            let mut best = [f32::INFINITY; MAX_BEST_VIEWS];
-            let mut seen = 0;
-            for target in targets {
+            for (target, colour) in targets.iter().zip(&mut colours) {
                 let Some(at) = target.locate(point) else {
                     continue;
                 };
                 if !target.inside(&at) {
-                    return RULED_OUT;
+                    return (own, true, colours);
                 }
-                let colour = target.colour(&at);
-                let cost = (0..3).map(|c| (colour[c] - own[c]).abs()).sum::<f32>() / 3.0;
+                *colour = target.colour(&at);
+            }
+            (own, false, colours)
+        })
+        .collect();
+    let own: Vec<[f32; 3]> = sampled.iter().map(|(own, _, _)| *own).collect();
+    let per_target: Vec<Vec<f32>> = (0..targets.len())
+        .into_par_iter()
+        .map(|t| {
+            let theirs: Vec<[f32; 3]> = sampled.iter().map(|(_, _, c)| c[t]).collect();
+            window_costs(&own, &theirs, bw, bh, radius)
+        })
+        .collect();
+    (0..n)
+        .map(|i| {
+            let (_, carved, _) = &sampled[i];
+            if *carved || own[i][0].is_nan() {
+                return RULED_OUT;
+            }
+            // The smallest costs so far, ascending.
+            let mut best = [f32::INFINITY; MAX_BEST_VIEWS];
+            let mut seen = 0;
+            for costs in &per_target {
+                let cost = costs[i];
+                if !cost.is_finite() {
+                    continue;
+                }
                 seen += 1;
                 let kept = &mut best[..best_views];
                 if cost < kept[best_views - 1] {
@@ -605,43 +684,79 @@ fn plane_costs(
         .collect()
 }
 
-/// The mean of each pixel's `(2 r + 1)^2` window over the pixels not ruled out (clipped at the
-/// borders); a ruled-out pixel stays ruled out. (Counting ruled-out neighbours as a cost would
-/// pull slanted surfaces near the silhouette towards planes that keep the whole window inside
-/// the hull.)
-fn box_mean(costs: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
-    let sums = |values: &[(f32, u32)], w: usize, h: usize, horizontal: bool| {
-        let mut out = vec![(0.0f32, 0u32); w * h];
-        for y in 0..h {
-            for x in 0..w {
-                let (lo, hi) = if horizontal {
-                    (x.saturating_sub(r), (x + r + 1).min(w))
-                } else {
-                    (y.saturating_sub(r), (y + r + 1).min(h))
-                };
-                out[y * w + x] = (lo..hi)
-                    .map(|t| values[if horizontal { y * w + t } else { t * w + x }])
-                    .fold((0.0, 0), |(s, n), (c, k)| (s + c, n + k));
-            }
-        }
-        out
-    };
-    let finite: Vec<(f32, u32)> = costs
+/// Colour variance (per channel value, 0 to 255 squared) below which a window has no texture to
+/// correlate: its cost is 1 (no evidence) rather than noise divided by nothing.
+const MIN_VARIANCE: f32 = 4.0;
+
+/// Per pixel, one minus the zero-mean normalised cross-correlation of `own` and `theirs` over
+/// the `(2 r + 1)^2` window (clipped at the borders) of pixels where both are known (not NaN),
+/// the three channels as three samples each; NaN where the pixel itself is unknown in either.
+fn window_costs(own: &[[f32; 3]], theirs: &[[f32; 3]], w: usize, h: usize, r: usize) -> Vec<f32> {
+    // Per pixel: count, sum a, sum b, sum a^2, sum b^2, sum ab (over both known, channels summed).
+    let terms: Vec<[f32; 6]> = own
         .iter()
-        .map(|&c| if c.is_finite() { (c, 1) } else { (0.0, 0) })
+        .zip(theirs)
+        .map(|(a, b)| {
+            if a[0].is_nan() || b[0].is_nan() {
+                return [0.0; 6];
+            }
+            let mut t = [3.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+            for c in 0..3 {
+                t[1] += a[c];
+                t[2] += b[c];
+                t[3] += a[c] * a[c];
+                t[4] += b[c] * b[c];
+                t[5] += a[c] * b[c];
+            }
+            t
+        })
         .collect();
-    let window = sums(&sums(&finite, w, h, true), w, h, false);
-    costs
+    let window = window_sums(&window_sums(&terms, w, h, r, true), w, h, r, false);
+    terms
         .iter()
         .zip(window)
-        .map(|(&c, (sum, n))| {
-            if c.is_finite() {
-                sum / n as f32
-            } else {
-                RULED_OUT
+        .map(|(t, [n, sa, sb, saa, sbb, sab])| {
+            if t[0] == 0.0 {
+                return f32::NAN;
             }
+            let va = saa / n - (sa / n).powi(2);
+            let vb = sbb / n - (sb / n).powi(2);
+            if va < MIN_VARIANCE || vb < MIN_VARIANCE {
+                return 1.0;
+            }
+            let covariance = sab / n - (sa / n) * (sb / n);
+            1.0 - (covariance / (va * vb).sqrt()).clamp(-1.0, 1.0)
         })
         .collect()
+}
+
+/// Sums of `values` over each pixel's `2 r + 1` neighbours along one axis (clipped at the
+/// borders), in a fixed order.
+fn window_sums(
+    values: &[[f32; 6]],
+    w: usize,
+    h: usize,
+    r: usize,
+    horizontal: bool,
+) -> Vec<[f32; 6]> {
+    let mut out = vec![[0.0f32; 6]; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let (lo, hi) = if horizontal {
+                (x.saturating_sub(r), (x + r + 1).min(w))
+            } else {
+                (y.saturating_sub(r), (y + r + 1).min(h))
+            };
+            let sum = &mut out[y * w + x];
+            for t in lo..hi {
+                let v = &values[if horizontal { y * w + t } else { t * w + x }];
+                for (s, v) in sum.iter_mut().zip(v) {
+                    *s += v;
+                }
+            }
+        }
+    }
+    out
 }
 
 #[cfg(test)]
@@ -688,10 +803,15 @@ mod tests_support {
     }
 
     pub(super) fn views(count: usize) -> (Vec<RgbView>, Vec<Vec<f32>>) {
+        views_at(count, 0.5)
+    }
+
+    /// `count` of the paper's test views (the first top-down) `radius_m` from the box.
+    pub(super) fn views_at(count: usize, radius_m: f32) -> (Vec<RgbView>, Vec<Vec<f32>>) {
         let k = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
         let layout = HemisphereLayout {
             count,
-            radius_m: 0.5,
+            radius_m,
             ..HemisphereLayout::paper_test()
         };
         let cameras = layout.cameras(k, Vec3::new(0.0, 0.0, 0.025), 1).unwrap();
@@ -714,8 +834,74 @@ mod tests_support {
 mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used)] // tests may fail loudly
 
-    use super::tests_support::views;
+    use super::tests_support::{views, views_at};
     use super::*;
+
+    /// Per view: the object pixels, those with a depth, and the median error of those, metres.
+    fn object_errors(
+        views: &[RgbView],
+        depths: &[SweptDepth],
+        truth: &[Vec<f32>],
+    ) -> Vec<(usize, usize, f32)> {
+        views
+            .iter()
+            .zip(depths.iter().zip(truth))
+            .map(|(view, (swept, truth))| {
+                let mask = view.mask.as_ref().unwrap();
+                let mut errors: Vec<f32> = (0..mask.len())
+                    .filter(|&i| mask[i] && swept.depth_m[i] > 0.0)
+                    .map(|i| (swept.depth_m[i] - truth[i]).abs())
+                    .collect();
+                errors.sort_by(f32::total_cmp);
+                let median = errors
+                    .get(errors.len() / 2)
+                    .copied()
+                    .unwrap_or(f32::INFINITY);
+                (mask.iter().filter(|m| **m).count(), errors.len(), median)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn each_view_lit_differently_still_gives_the_top_to_a_fraction_of_a_millimetre() {
+        // A lamp moving with each camera, as the renderer's: the same face is darker or
+        // brighter, with an offset, from each view. Absolute colour differences would match
+        // nothing; the correlation does not see gain and offset.
+        let (mut views, truth) = views(5);
+        for (i, view) in views.iter_mut().enumerate() {
+            let (gain, offset) = (0.4 + 0.15 * i as f32, 10.0 * i as f32);
+            for p in &mut view.rgb {
+                *p = p.map(|c| (f32::from(c) * gain + offset).min(255.0) as u8);
+            }
+        }
+        let depths = sweep_depths(&views, &SweepParams::default()).unwrap();
+        let (object, found, median) = object_errors(&views, &depths, &truth)[0];
+        assert!(found * 20 > object * 19, "{found} of {object}");
+        assert!(median < 0.3e-3, "median error {median} m from above");
+    }
+
+    #[test]
+    fn a_camera_just_above_the_workspace_still_finds_the_object() {
+        // A low view 0.7 m away whose camera is 5 mm above the workspace's top: its rays cross
+        // the top a centimetre ahead, and planes swept from there in inverse depth would be
+        // decimetres apart at the object. The reach around where the cameras look bounds them.
+        let (views, truth) = views_at(5, 0.7);
+        let (low, height) = views
+            .iter()
+            .map(|v| v.camera.position().z)
+            .enumerate()
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .unwrap();
+        let params = SweepParams {
+            max_height_m: height - 0.005,
+            consistency: None,
+            ..SweepParams::default()
+        };
+        let depths = sweep_depths(&views, &params).unwrap();
+        let (object, found, median) = object_errors(&views, &depths, &truth)[low];
+        assert!(found * 2 > object, "view {low}: {found} of {object}");
+        assert!(median < 5e-3, "view {low}: median error {median} m");
+    }
 
     #[test]
     fn a_textured_box_is_recovered_to_a_millimetre_and_the_hull_contains_it() {
