@@ -470,6 +470,14 @@ fn sweep_view(
         far = coarse[(last + 2).min(COARSE_PLANES - 1)];
     }
     let planes = inverse_depth_planes(near, far, params.planes);
+    // The reference's colour per box pixel, NaN off the object.
+    let own: Vec<[f32; 3]> = (0..bw * bh)
+        .map(|i| {
+            box_point(reference, &rays, 1.0, sweep_box, i).map_or([f32::NAN; 3], |(image, _)| {
+                reference.rgb[image].map(f32::from)
+            })
+        })
+        .collect();
     // Per box pixel: the best cost, its plane, its neighbours' costs, the hull's plane.
     let n = bw * bh;
     let mut best = vec![(RULED_OUT, usize::MAX, RULED_OUT, RULED_OUT); n];
@@ -482,7 +490,7 @@ fn sweep_view(
                 &rays,
                 &targets,
                 depth,
-                sweep_box,
+                (sweep_box, &own),
                 best_views,
                 params.window_radius,
             );
@@ -610,53 +618,49 @@ fn plane_meets_hull(
 /// views, a view's cost being one minus the zero-mean normalised cross-correlation of the
 /// reference's window around the pixel with what that view shows of the window's points (the
 /// three channels together; [`window_costs`]). The correlation forgives the gain and offset
-/// that a light fixed to each camera puts on one surface seen from two of them.
+/// that a light fixed to each camera puts on one surface seen from two of them. A window's
+/// points that a mask carves away are not on the object at this depth and count in no view's
+/// correlation. `own`: the reference's colour per box pixel, NaN off the object.
 fn plane_costs(
     reference: &RgbView,
     rays: &Rays,
     targets: &[Target<'_>],
     d: f32,
-    area: (usize, usize, usize, usize),
+    (area, own): ((usize, usize, usize, usize), &[[f32; 3]]),
     best_views: usize,
     radius: usize,
 ) -> Vec<f32> {
     let (bw, bh) = (area.2, area.3);
-    let n = bw * bh;
-    // Per box pixel: the reference's colour (NaN off the object), whether a mask carves the
-    // point away, and each target's colour there (NaN where it does not see the point).
-    let sampled: Vec<([f32; 3], bool, Vec<[f32; 3]>)> = (0..n)
+    // Per box pixel, its point on the plane if no mask carves it away (and it is the object's).
+    let on_hull: Vec<Option<Vec3>> = (0..own.len())
         .into_par_iter()
         .with_min_len(512)
         .map(|i| {
-            let mut colours = vec![[f32::NAN; 3]; targets.len()];
-            let Some((image, point)) = box_point(reference, rays, d, area, i) else {
-                return ([f32::NAN; 3], false, colours);
-            };
-            let own = reference.rgb[image].map(f32::from);
-            for (target, colour) in targets.iter().zip(&mut colours) {
-                let Some(at) = target.locate(point) else {
-                    continue;
-                };
-                if !target.inside(&at) {
-                    return (own, true, colours);
-                }
-                *colour = target.colour(&at);
-            }
-            (own, false, colours)
+            let (_, point) = box_point(reference, rays, d, area, i)?;
+            let carved = targets
+                .iter()
+                .any(|t| t.locate(point).is_some_and(|at| !t.inside(&at)));
+            (!carved).then_some(point)
         })
         .collect();
-    let own: Vec<[f32; 3]> = sampled.iter().map(|(own, _, _)| *own).collect();
-    let per_target: Vec<Vec<f32>> = (0..targets.len())
-        .into_par_iter()
-        .map(|t| {
-            let theirs: Vec<[f32; 3]> = sampled.iter().map(|(_, _, c)| c[t]).collect();
-            window_costs(&own, &theirs, bw, bh, radius)
+    // Per target: its cost at every box pixel (NaN where it does not see the point).
+    let per_target: Vec<Vec<f32>> = targets
+        .par_iter()
+        .map(|target| {
+            let theirs: Vec<[f32; 3]> = on_hull
+                .iter()
+                .map(|point| {
+                    point
+                        .and_then(|p| target.locate(p))
+                        .map_or([f32::NAN; 3], |at| target.colour(&at))
+                })
+                .collect();
+            window_costs(own, &theirs, bw, bh, radius)
         })
         .collect();
-    (0..n)
+    (0..own.len())
         .map(|i| {
-            let (_, carved, _) = &sampled[i];
-            if *carved || own[i][0].is_nan() {
+            if on_hull[i].is_none() {
                 return RULED_OUT;
             }
             // The smallest costs so far, ascending.
