@@ -376,10 +376,18 @@ fn run(args: &Args) -> Result<(), String> {
         };
         params.labels.physics_shape.shell = args.shell;
         params.depth_from_rgb = match p.rgb {
-            Some(from) => Some(RgbInput {
-                depth: DepthPredictor::shipped(from).map_err(|e| e.to_string())?,
-                per_face: args.rgb_per_face,
-            }),
+            Some(from) => {
+                let depth = DepthPredictor::shipped(from).map_err(|e| e.to_string())?;
+                Some(RgbInput {
+                    // As `plan` does: one network planning in one view gets complete depth.
+                    depth: if p.top_down_of_rgb {
+                        depth.for_one_view()
+                    } else {
+                        depth
+                    },
+                    per_face: args.rgb_per_face,
+                })
+            }
             None => None,
         };
         params.labels.physics.grip_true_surface = args.grip_surface;

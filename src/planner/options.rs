@@ -157,8 +157,13 @@ impl PlanOptions {
                     expected: "at least 2 views to predict depth from RGB",
                 });
             }
+            let depth = DepthPredictor::shipped(from)?;
             params.depth_from_rgb = Some(RgbInput {
-                depth: DepthPredictor::shipped(from)?,
+                depth: if self.fuse {
+                    depth
+                } else {
+                    depth.for_one_view()
+                },
                 per_face: false,
             });
             // Without fusion every view predicts depth, and the network plans in the first,

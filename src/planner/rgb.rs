@@ -189,6 +189,25 @@ impl PartialEq for DepthPredictor {
 }
 
 impl DepthPredictor {
+    /// This predictor for a network that plans in one predicted view (the default run's
+    /// top-down GQ-CNN): the sweep's object pixels that no second view confirms take the visual
+    /// hull's depth instead of being left missing (the network was trained on complete depth
+    /// images and scores holes as nothing; the hull never lies beyond the surface, so the hand
+    /// check stays on the safe side). Measured on the development set (94 built-in objects
+    /// from index 50, the top-down GQ-CNN on 5 views at 0.7 m): 77% of objects held with the
+    /// hull, 70% keeping the unconfirmed winners, 79% on rendered depth. The networks are
+    /// returned as they are.
+    #[must_use]
+    pub fn for_one_view(self) -> Self {
+        match self {
+            Self::Baseline(sweep) => Self::Baseline(SweepParams {
+                hull_where_unconfirmed: true,
+                ..sweep
+            }),
+            other => other,
+        }
+    }
+
     /// The shipped predictor of `from`: the baseline with its default settings, or the shipped
     /// LSM on every thread of rayon's pool (as the baseline runs).
     ///
