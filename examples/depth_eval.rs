@@ -6,7 +6,7 @@
 //!
 //! ```text
 //! cargo run --release --example depth_eval -- [--per-category 3] [--per-face] [--distance-m 0.5]
-//!     [--views 3,5,9]
+//!     [--views 3,5,9] [--sweep-hull]
 //! ```
 //!
 //! Per method and N, over the top-down view and over all N views: the mean absolute error of
@@ -52,6 +52,10 @@ struct Args {
     /// view only the LSM, stereo and carving need two).
     #[arg(long, value_delimiter = ',', default_values_t = [3usize, 5, 9])]
     views: Vec<usize>,
+    /// The sweep's unconfirmed pixels at the visual hull's depth, as the default run's one-view
+    /// planner gets them (`DepthPredictor::for_one_view`), instead of missing (`plan --rgb`).
+    #[arg(long)]
+    sweep_hull: bool,
 }
 
 /// Sums over object pixels.
@@ -138,7 +142,10 @@ fn main() -> ExitCode {
 fn run(args: &Args) -> Result<(), String> {
     let renderer = Renderer::new(Backend::Auto).map_err(|e| e.to_string())?;
     let intrinsics = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
-    let sweep = SweepParams::default();
+    let sweep = SweepParams {
+        hull_where_unconfirmed: args.sweep_hull,
+        ..SweepParams::default()
+    };
     let input = RgbInput {
         depth: DepthPredictor::Baseline(sweep.clone()),
         per_face: args.per_face,
