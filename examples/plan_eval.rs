@@ -52,8 +52,9 @@ struct Args {
     /// The shared mesh folder (skipped when absent).
     #[arg(long, default_value = "../shared/data/meshes")]
     data: PathBuf,
-    /// Every real mesh of the shared folder: the two YCB boxes and the mug URDF too, and the
-    /// 40 household objects of `household/manifest.json`.
+    /// Every real mesh of the shared folder: the two YCB boxes and the mug URDF too, the other
+    /// real objects (`OTHER_REAL_MESHES`: the YCB bowl and plate, ...) and the 40 household
+    /// objects of `household/manifest.json`.
     #[arg(long)]
     every_real_mesh: bool,
     /// Distance of the multi-view policies' cameras, metres (`plan`'s: 0.65; the paper's test
@@ -289,6 +290,26 @@ fn main() -> ExitCode {
     mvgrasp::cli::exit(run(&Args::parse()))
 }
 
+/// The other real (not procedural) object meshes of the shared folder, which
+/// `--every-real-mesh` adds to [`REAL_MESHES`] and the household set: the YCB bowl and
+/// plate, the rest of robosuite's objects, Dex-Net's clown and spray bottle, and pybullet's
+/// objects (its URDFs carry their scale; its tables, planes, tray and primitive toys are not
+/// objects to grasp).
+const OTHER_REAL_MESHES: [&str; 12] = [
+    "ycb/dishes/evo_bowl_col.obj",
+    "ycb/dishes/plate_8in_col.obj",
+    "robosuite/objects/meshes/cereal.stl",
+    "robosuite/objects/meshes/bread.stl",
+    "robosuite/objects/meshes/lemon.stl",
+    "dexnet/meshes/example/clown.obj",
+    "dexnet/meshes/example/spray.obj",
+    "pybullet/duck_vhacd.urdf",
+    "pybullet/teddy_vhacd.urdf",
+    "pybullet/jenga/jenga.urdf",
+    "pybullet/lego/lego.urdf",
+    "pybullet/soccerball.urdf",
+];
+
 /// The household set's mesh files, relative to the shared mesh folder (none when the folder
 /// has no manifest).
 fn household_meshes(data: &std::path::Path) -> Result<Vec<String>, String> {
@@ -333,6 +354,7 @@ fn run(args: &Args) -> Result<(), String> {
             .collect()
     };
     if args.every_real_mesh {
+        real.extend(OTHER_REAL_MESHES.iter().map(|m| (*m).to_string()));
         real.extend(household_meshes(&args.data)?);
     }
     for m in &real {
