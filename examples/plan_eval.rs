@@ -25,6 +25,7 @@
 mod common;
 
 use common::{REAL_MESHES, wilson_95};
+use mvgrasp::evaluate::objects::{ObjectSet, objects as real_objects};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -52,9 +53,9 @@ struct Args {
     /// The shared mesh folder (skipped when absent).
     #[arg(long, default_value = "../shared/data/meshes")]
     data: PathBuf,
-    /// Every real mesh of the shared folder: the two YCB boxes and the mug URDF too, the other
-    /// real objects (`OTHER_REAL_MESHES`: the YCB bowl and plate, ...) and the 40 household
-    /// objects of `household/manifest.json`.
+    /// Every real mesh of the shared folder (`evaluate --set real`'s: the two YCB boxes and
+    /// the mug URDF too, the YCB bowl and plate, ... and the 40 household objects of
+    /// `household/manifest.json`).
     #[arg(long)]
     every_real_mesh: bool,
     /// Distance of the multi-view policies' cameras, metres (`plan`'s: 0.65; the paper's test
@@ -290,49 +291,6 @@ fn main() -> ExitCode {
     mvgrasp::cli::exit(run(&Args::parse()))
 }
 
-/// The other real (not procedural) object meshes of the shared folder, which
-/// `--every-real-mesh` adds to [`REAL_MESHES`] and the household set: the YCB bowl and
-/// plate, the rest of robosuite's objects, Dex-Net's clown and spray bottle, and pybullet's
-/// objects (its URDFs carry their scale; its tables, planes, tray and primitive toys are not
-/// objects to grasp).
-const OTHER_REAL_MESHES: [&str; 12] = [
-    "ycb/dishes/evo_bowl_col.obj",
-    "ycb/dishes/plate_8in_col.obj",
-    "robosuite/objects/meshes/cereal.stl",
-    "robosuite/objects/meshes/bread.stl",
-    "robosuite/objects/meshes/lemon.stl",
-    "dexnet/meshes/example/clown.obj",
-    "dexnet/meshes/example/spray.obj",
-    "pybullet/duck_vhacd.urdf",
-    "pybullet/teddy_vhacd.urdf",
-    "pybullet/jenga/jenga.urdf",
-    "pybullet/lego/lego.urdf",
-    "pybullet/soccerball.urdf",
-];
-
-/// The household set's mesh files, relative to the shared mesh folder (none when the folder
-/// has no manifest).
-fn household_meshes(data: &std::path::Path) -> Result<Vec<String>, String> {
-    let path = data.join("household/manifest.json");
-    let Ok(text) = std::fs::read_to_string(&path) else {
-        return Ok(Vec::new());
-    };
-    let manifest: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
-    let objects = manifest["objects"]
-        .as_array()
-        .ok_or_else(|| format!("{}: no \"objects\" list", path.display()))?;
-    objects
-        .iter()
-        .map(|o| {
-            o["file"]
-                .as_str()
-                .map(|f| format!("household/{f}"))
-                .ok_or_else(|| format!("{}: an object without \"file\"", path.display()))
-        })
-        .collect()
-}
-
 fn run(args: &Args) -> Result<(), String> {
     // (name, group, mesh): the group is the category, or "real meshes".
     let mut objects: Vec<(String, &'static str, TriangleMesh)> = Vec::new();
@@ -344,19 +302,19 @@ fn run(args: &Args) -> Result<(), String> {
     }
     // By default the two YCB boxes are left out (no Panda grasp, see REAL_MESHES) and the
     // pybullet mug's URDF (its handle filled by the physics hull) to grasp_eval;
-    // --every-real-mesh takes them and the household set too.
-    let mut real: Vec<String> = if args.every_real_mesh {
-        REAL_MESHES.iter().map(|m| (*m).to_string()).collect()
+    // --every-real-mesh takes every real mesh (`evaluate --set real`'s).
+    let real: Vec<String> = if args.every_real_mesh {
+        real_objects(&ObjectSet::Real, 0, &args.data)
+            .map_err(|e| e.to_string())?
+            .into_iter()
+            .map(|o| o.name)
+            .collect()
     } else {
         REAL_MESHES[2..11]
             .iter()
             .map(|m| (*m).to_string())
             .collect()
     };
-    if args.every_real_mesh {
-        real.extend(OTHER_REAL_MESHES.iter().map(|m| (*m).to_string()));
-        real.extend(household_meshes(&args.data)?);
-    }
     for m in &real {
         let path = args.data.join(m);
         if path.is_file() {

@@ -114,6 +114,12 @@ pub enum Error {
         /// What is wrong.
         problem: String,
     },
+    /// An evaluation that cannot go on: its object set, its record folder or its options.
+    #[error("evaluate: {problem}")]
+    Evaluate {
+        /// What is wrong (naming the file or option).
+        problem: String,
+    },
     /// A dataset asked of no objects.
     #[error("dataset: no objects to make a dataset of")]
     NoObjects,
@@ -216,7 +222,8 @@ impl Error {
             | Self::NoSuchShard { .. }
             | Self::ForeignDataset { .. }
             | Self::ForeignShard { .. }
-            | Self::EmptyDataset { .. } => ErrorKind::Dataset,
+            | Self::EmptyDataset { .. }
+            | Self::Evaluate { .. } => ErrorKind::Dataset,
         }
     }
 

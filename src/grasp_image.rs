@@ -41,11 +41,28 @@ pub fn write_grasp_picture(
     grasps: &[Grasp],
     gripper: &Gripper,
 ) -> Result<()> {
-    let boxes: Vec<ColoredBox> = grasps
+    let colored: Vec<(Grasp, [u8; 3])> = grasps
         .iter()
         .enumerate()
-        .flat_map(|(i, grasp)| {
-            let color = GRASP_COLORS.get(i).copied().unwrap_or([150, 150, 150]);
+        .map(|(i, g)| (*g, GRASP_COLORS.get(i).copied().unwrap_or([150, 150, 150])))
+        .collect();
+    write_colored_grasp_picture(path, mesh, table_from_object, &colored, gripper)
+}
+
+/// [`write_grasp_picture`] with each hand in its own colour.
+///
+/// # Errors
+/// See [`write_grasp_picture`].
+pub fn write_colored_grasp_picture(
+    path: &Path,
+    mesh: &TriangleMesh,
+    table_from_object: &Pose3,
+    grasps: &[(Grasp, [u8; 3])],
+    gripper: &Gripper,
+) -> Result<()> {
+    let boxes: Vec<ColoredBox> = grasps
+        .iter()
+        .flat_map(|&(grasp, color)| {
             hand_sketch(gripper, grasp.width_m)
                 .into_iter()
                 .map(move |(half, gripper_from_box)| {

@@ -12,6 +12,7 @@ pub mod cli;
 pub mod convert;
 pub mod dataset;
 pub mod error;
+pub mod evaluate;
 pub mod grasp_dataset;
 pub mod grasp_image;
 pub mod grasps_file;

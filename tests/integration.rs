@@ -8,6 +8,7 @@ mod common;
 mod shared_data;
 
 mod cli;
+mod evaluate;
 mod grasp_dataset;
 mod layering;
 mod plan;

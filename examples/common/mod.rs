@@ -1,22 +1,11 @@
 //! What the evaluation examples share.
 
-/// The real meshes of the evaluations, paths under `../shared/data/meshes` (all in metres).
-/// The first two (YCB's cracker and sugar boxes) have no Panda grasp lying down: wider than
-/// its 8 cm from above, and from the side its palm meets the table.
-pub const REAL_MESHES: [&str; 12] = [
-    "ycb/meshes/003_cracker_box_textured.obj",
-    "ycb/meshes/004_sugar_box_textured.obj",
-    "ycb/meshes/005_tomato_soup_can_textured.obj",
-    "ycb/meshes/006_mustard_bottle_textured.obj",
-    "ycb/meshes/009_gelatin_box_textured.obj",
-    "ycb/meshes/010_potted_meat_can_textured.obj",
-    "dexnet/test/models/bar_clamp.obj",
-    "dexnet/meshes/example/box.obj",
-    "robosuite/objects/meshes/bottle.obj",
-    "robosuite/objects/meshes/can.stl",
-    "robosuite/objects/meshes/milk.stl",
-    "pybullet/objects/mug.urdf",
-];
+/// The real meshes of the evaluations, paths under `../shared/data/meshes` (all in metres;
+/// the first two lie flat wider than the hand opens).
+pub use mvgrasp::evaluate::objects::REAL_MESHES;
+/// The Wilson score interval at 95% confidence.
+#[allow(unused_imports)] // each example compiles this module; not every one takes these
+pub use mvgrasp::evaluate::report::wilson_95;
 
 /// The options of the label evaluations (`grasp_eval`, `label_eval`).
 #[derive(clap::Args, Debug)]
@@ -67,18 +56,4 @@ pub fn analyse_at_rest(
         object,
         analysis,
     }))
-}
-
-/// The Wilson score interval of `k` successes in `n` trials at 95 % confidence, as fractions
-/// (`(0, 1)` for no trials).
-#[allow(dead_code)] // see EvalArgs
-pub fn wilson_95(k: usize, n: usize) -> (f64, f64) {
-    if n == 0 {
-        return (0.0, 1.0);
-    }
-    let (k, n, z) = (k as f64, n as f64, 1.959_964);
-    let p = k / n;
-    let centre = (p + z * z / (2.0 * n)) / (1.0 + z * z / n);
-    let half = z / (1.0 + z * z / n) * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt();
-    ((centre - half).max(0.0), (centre + half).min(1.0))
 }

@@ -1,0 +1,150 @@
+//! `evaluate`: the project's evaluation from one command, into a report folder.
+//!
+//! ```text
+//! cargo run --release --bin evaluate                       # the small default: minutes
+//! cargo run --release --bin evaluate -- --full --out report-full
+//! cargo run --release --bin evaluate -- --set real --policy rgb --policy depth-fused --seeds 0,1,2
+//! ```
+//!
+//! Writes `OUT/report.md`, `OUT/report.html` (self-contained), `OUT/results.json` (every
+//! record), `OUT/pictures/` and its records `OUT/records.jsonl`: run the same command again
+//! after an interruption and it takes up where it stopped (the same settings and seeds give
+//! the same bytes). See `mvgrasp::evaluate`.
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::Parser;
+use indicatif::{ProgressBar, ProgressStyle};
+use mvgrasp::evaluate::grasps::POLICIES;
+use mvgrasp::evaluate::{EvalConfig, Lines, Progress, evaluate};
+
+/// Evaluate the planners on held-out and real objects, checked in the project's trial, and
+/// write a report folder.
+#[derive(Parser, Debug)]
+#[command(name = "evaluate", version, about)]
+struct Args {
+    /// The report folder (created; a folder of another run's settings is refused).
+    #[arg(long, default_value = "report")]
+    out: PathBuf,
+    /// The full evaluation: 5 held-out built-in objects per category and every real mesh,
+    /// every resting pose of at least 5%, seeds 0, 1 and 2, the exhaustive search for
+    /// coverage, and the policies rgb, depth, rgb-fused and depth-fused (hours on 2 cores).
+    /// Options given beside it override its choices.
+    #[arg(long)]
+    full: bool,
+    /// An object set (repeat): held-out (built-in objects past every training index), dev
+    /// (built-in, where settings are chosen), real (every real mesh of --data), or
+    /// folder:PATH. Default: held-out and real.
+    #[arg(long = "set")]
+    sets: Vec<String>,
+    /// Built-in objects per category in the built-in sets (default 1; --full: 5).
+    #[arg(long)]
+    per_category: Option<u32>,
+    /// The shared mesh folder (`real` takes every real mesh found there).
+    #[arg(long, default_value = "../shared/data/meshes")]
+    data: PathBuf,
+    /// At most this many meshes of each file set (real, folder:PATH; 0: all; default 6,
+    /// --full: all).
+    #[arg(long)]
+    max_meshes: Option<usize>,
+    /// A policy (repeat): rgb (the default run), depth (the same on rendered depth),
+    /// rgb-fused, depth-fused, lsm, lsm-fused, mvs, mvs-fused. Default: rgb and depth.
+    #[arg(long = "policy")]
+    policies: Vec<String>,
+    /// The plans' seeds (default 0; --full: 0,1,2).
+    #[arg(long, value_delimiter = ',')]
+    seeds: Vec<u64>,
+    /// Every offered resting pose of at least 5% probability, not only the most probable.
+    #[arg(long)]
+    all_poses: bool,
+    /// The exhaustive search on the true mesh for a grasp that holds (coverage).
+    #[arg(long)]
+    coverage: bool,
+    /// Plain progress lines even on a terminal.
+    #[arg(long)]
+    plain: bool,
+}
+
+struct Bar(ProgressBar);
+
+impl Progress for Bar {
+    fn step(&mut self, done: usize, total: usize, what: &str) {
+        self.0.set_length(total as u64);
+        self.0.set_position(done as u64);
+        self.0.set_message(what.to_string());
+    }
+}
+
+fn main() -> ExitCode {
+    mvgrasp::cli::exit(run(&Args::parse()))
+}
+
+fn config_of(args: &Args) -> EvalConfig {
+    let mut config = EvalConfig::small(args.data.clone());
+    if args.full {
+        config.per_category = 5;
+        config.seeds = vec![0, 1, 2];
+        config.all_poses = true;
+        config.coverage = true;
+        config.max_meshes = 0;
+        config.policies = ["rgb", "depth", "rgb-fused", "depth-fused"]
+            .map(String::from)
+            .to_vec();
+    }
+    if !args.sets.is_empty() {
+        config.sets.clone_from(&args.sets);
+    }
+    if let Some(n) = args.per_category {
+        config.per_category = n;
+    }
+    if let Some(n) = args.max_meshes {
+        config.max_meshes = n;
+    }
+    if !args.policies.is_empty() {
+        config.policies.clone_from(&args.policies);
+    }
+    if !args.seeds.is_empty() {
+        config.seeds.clone_from(&args.seeds);
+    }
+    config.all_poses |= args.all_poses;
+    config.coverage |= args.coverage;
+    config
+}
+
+fn run(args: &Args) -> Result<(), String> {
+    let config = config_of(args);
+    let known: Vec<&str> = POLICIES.iter().map(|(n, ..)| *n).collect();
+    if let Some(p) = config
+        .policies
+        .iter()
+        .find(|p| !known.contains(&p.as_str()))
+    {
+        return Err(format!(
+            "--policy {p}: expected one of {}",
+            known.join(", ")
+        ));
+    }
+    let mut progress: Box<dyn Progress> = if std::io::stderr().is_terminal() && !args.plain {
+        let bar = ProgressBar::new(0);
+        bar.set_style(
+            ProgressStyle::with_template("{bar:30} {pos}/{len} objects, {eta} left  {msg}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        Box::new(Bar(bar))
+    } else {
+        Box::new(Lines)
+    };
+    let results = evaluate(&config, &args.out, progress.as_mut()).map_err(|e| e.to_string())?;
+    for (object, why) in &results.skipped {
+        eprintln!("not evaluated: {object}: {why}");
+    }
+    println!(
+        "{} plans on {} objects and poses: {}",
+        results.grasps.len(),
+        results.objects.len(),
+        args.out.join("report.md").display()
+    );
+    Ok(())
+}

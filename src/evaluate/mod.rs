@@ -1,0 +1,302 @@
+//! `evaluate`: the project's evaluation from one command. Suites of work over named object
+//! sets, each piece recorded as it finishes ([`journal`]), and a report folder written from
+//! the records alone ([`report`]): `report.md`, the same as a self-contained `report.html`,
+//! pictures of the chosen grasps, and `results.json` with every record. The same settings and
+//! seeds give the same bytes, resumed or not (timings are kept out of the records).
+//!
+//! The grasp suite ([`grasps`]): each policy (a `plan` command) plans one grasp per object,
+//! offered resting pose and seed, and the project's trial tries it; a missing grasp counts as
+//! a failure. With `coverage`, an exhaustive search on the true mesh says which objects some
+//! grasp in reach can hold.
+
+pub mod grasps;
+pub mod journal;
+pub mod objects;
+pub mod report;
+
+use std::path::{Path, PathBuf};
+
+use mvgrasp_grasp::GraspObject;
+use mvgrasp_render::Renderer;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use grasps::{EvalPolicy, GraspRecord, PlacedObject, PoseKind, ReadyPolicy};
+use journal::Journal;
+use objects::{ObjectRef, ObjectSet};
+
+/// What an evaluation runs: its object sets, policies, seeds and poses. Written to the report
+/// folder's `config.json`; a folder holding another config's records is refused.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EvalConfig {
+    /// Object sets by name ([`ObjectSet`]: held-out, dev, real, folder:PATH).
+    pub sets: Vec<String>,
+    /// Built-in objects per category in the built-in sets.
+    pub per_category: u32,
+    /// The shared mesh folder the `real` set reads.
+    pub data: PathBuf,
+    /// At most this many meshes of each file set (`real`, `folder:`; 0: all), for quick runs.
+    pub max_meshes: usize,
+    /// The policies ([`grasps::POLICIES`]).
+    pub policies: Vec<String>,
+    /// The plans' seeds; each object is planned once per seed.
+    pub seeds: Vec<u64>,
+    /// Every offered resting pose of at least 5% probability, not only the most probable.
+    pub all_poses: bool,
+    /// The exhaustive search for a grasp that holds, per object and pose (coverage).
+    pub coverage: bool,
+}
+
+impl EvalConfig {
+    /// The small default: 1 held-out built-in object per category and the first 6 real meshes,
+    /// the default run and the same planner on rendered depth, seed 0, the most probable pose.
+    pub fn small(data: PathBuf) -> Self {
+        Self {
+            sets: vec!["held-out".into(), "real".into()],
+            per_category: 1,
+            data,
+            max_meshes: 6,
+            policies: vec!["rgb".into(), "depth".into()],
+            seeds: vec![0],
+            all_poses: false,
+            coverage: false,
+        }
+    }
+}
+
+/// Progress of a run, for a terminal or a log.
+pub trait Progress {
+    /// `done` of `total` pieces finished; `what` the piece just finished.
+    fn step(&mut self, done: usize, total: usize, what: &str);
+}
+
+/// Plain lines on standard error (CI logs).
+pub struct Lines;
+
+impl Progress for Lines {
+    fn step(&mut self, done: usize, total: usize, what: &str) {
+        eprintln!("[{done}/{total}] {what}");
+    }
+}
+
+/// Everything an evaluation found, in its work order.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Results {
+    /// The settings.
+    pub config: EvalConfig,
+    /// The policies: name, `plan` command, what it plans on.
+    pub policies: Vec<(String, String, String)>,
+    /// Each object and pose planned on.
+    pub objects: Vec<PlacedObject>,
+    /// Each plan and its trial.
+    pub grasps: Vec<GraspRecord>,
+    /// Objects that could not be evaluated, and why.
+    pub skipped: Vec<(String, String)>,
+}
+
+/// Runs `config` into the folder `out`, resuming from its records, and writes the report.
+///
+/// # Errors
+/// A folder holding another config's records, unknown set or policy names, a renderer or
+/// network that cannot start, or a report that cannot be written.
+pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) -> Result<Results> {
+    std::fs::create_dir_all(out).map_err(Error::io("create", out))?;
+    check_config(config, out)?;
+    let invalid = |problem: String| Error::Evaluate { problem };
+    let sets: Vec<ObjectSet> = config
+        .sets
+        .iter()
+        .map(|s| s.parse().map_err(|e| invalid(format!("set {e}"))))
+        .collect::<Result<_>>()?;
+    let policies: Vec<EvalPolicy> = config
+        .policies
+        .iter()
+        .map(|p| p.parse().map_err(|e| invalid(format!("policy {e}"))))
+        .collect::<Result<_>>()?;
+    if policies.is_empty() || config.seeds.is_empty() {
+        return Err(invalid("no policy or no seed to evaluate".into()));
+    }
+    let mut objects: Vec<ObjectRef> = Vec::new();
+    for set in &sets {
+        let mut found = objects::objects(set, config.per_category, &config.data)?;
+        if config.max_meshes > 0 && !matches!(set, ObjectSet::HeldOut | ObjectSet::Dev) {
+            found.truncate(config.max_meshes);
+        }
+        objects.extend(found);
+    }
+    let renderer = Renderer::new(mvgrasp_render::Backend::Auto)?;
+    let ready: Vec<ReadyPolicy> = policies
+        .into_iter()
+        .map(ReadyPolicy::new)
+        .collect::<Result<_>>()?;
+    let mut journal = Journal::open(&out.join("records.jsonl"))?;
+    let pictures = out.join("pictures");
+    std::fs::create_dir_all(&pictures).map_err(Error::io("create", &pictures))?;
+    let mut results = Results {
+        config: config.clone(),
+        policies: ready
+            .iter()
+            .map(|r| {
+                let (command, about) = grasps::POLICIES
+                    .iter()
+                    .find(|(n, ..)| *n == r.policy.name)
+                    .map_or(("", ""), |(_, c, a)| (*c, *a));
+                (
+                    r.policy.name.clone(),
+                    command.to_string(),
+                    about.to_string(),
+                )
+            })
+            .collect(),
+        objects: Vec::new(),
+        grasps: Vec::new(),
+        skipped: Vec::new(),
+    };
+    let total = objects.len();
+    for (done, object) in objects.iter().enumerate() {
+        let id = format!("{}|{}", object.set, object.name);
+        match evaluate_object(
+            object,
+            &id,
+            config,
+            &ready,
+            &renderer,
+            &mut journal,
+            &pictures,
+        ) {
+            Ok((placed, records)) => {
+                results.objects.extend(placed);
+                results.grasps.extend(records);
+            }
+            // An object the evaluation cannot use (a broken mesh file) is reported, not fatal.
+            Err(Error::Evaluate { problem }) => results.skipped.push((id, problem)),
+            Err(e) => results.skipped.push((id, e.to_string())),
+        }
+        progress.step(done + 1, total, &format!("{} {}", object.set, object.name));
+    }
+    report::write(&results, out)?;
+    Ok(results)
+}
+
+/// Refuses a folder whose `config.json` differs from `config`; writes it into a new one.
+fn check_config(config: &EvalConfig, out: &Path) -> Result<()> {
+    let path = out.join("config.json");
+    let text =
+        serde_json::to_string_pretty(config).map_err(Error::json("write", "config", &path))?;
+    match std::fs::read_to_string(&path) {
+        Ok(found) if found == text => Ok(()),
+        Ok(_) => Err(Error::Evaluate {
+            problem: format!(
+                "{}: this folder holds a run with other settings; choose another --out or \
+                 delete the folder",
+                path.display()
+            ),
+        }),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            std::fs::write(&path, text).map_err(Error::io("write", &path))
+        }
+        Err(e) => Err(Error::io("read", &path)(e)),
+    }
+}
+
+/// One object: its poses (from the journal, or found and recorded), each pose's plans, and a
+/// picture of the first seed's grasps.
+fn evaluate_object(
+    object: &ObjectRef,
+    id: &str,
+    config: &EvalConfig,
+    ready: &[ReadyPolicy],
+    renderer: &Renderer,
+    journal: &mut Journal,
+    pictures: &Path,
+) -> Result<(Vec<PlacedObject>, Vec<GraspRecord>)> {
+    // Loaded only when some piece of work is missing.
+    let mut loaded: Option<GraspObject> = None;
+    let poses_key = format!("poses|{id}");
+    let placed: Vec<PlacedObject> = match journal.get(&poses_key)? {
+        Some(placed) => placed,
+        None => {
+            let grasp_object = load(object, &mut loaded)?;
+            let rest = grasps::resting_poses(grasp_object)?;
+            let gripper = ready[0].gripper()?;
+            let mut placed = Vec::new();
+            for k in grasps::poses_to_try(&rest, config.all_poses) {
+                let (_, pose) = rest.get(k)?;
+                let holdable = if config.coverage {
+                    Some(grasps::any_grasp_holds(
+                        grasp_object,
+                        &pose.table_from_object,
+                        ready[0].params(),
+                        0,
+                    )?)
+                } else {
+                    None
+                };
+                placed.push(PlacedObject {
+                    object: object.name.clone(),
+                    set: object.set.clone(),
+                    group: object.group.clone(),
+                    pose: k,
+                    pose_probability: pose.probability,
+                    kind: PoseKind::of(
+                        grasp_object,
+                        &pose.table_from_object,
+                        gripper.max_opening_m,
+                    ),
+                    holdable,
+                });
+            }
+            journal.put(&poses_key, &placed)?
+        }
+    };
+    let mut records = Vec::new();
+    for p in &placed {
+        let mut first_seed = Vec::new();
+        for &seed in &config.seeds {
+            for policy in ready {
+                let key = format!("grasp|{id}|{}|{}|{seed}", p.pose, policy.policy.name);
+                let record = match journal.get(&key)? {
+                    Some(record) => record,
+                    None => {
+                        let grasp_object = load(object, &mut loaded)?;
+                        let record =
+                            policy.run(renderer, grasp_object, (&object.name, p.pose, seed))?;
+                        journal.put(&key, &record)?
+                    }
+                };
+                if seed == config.seeds[0] {
+                    first_seed.push(record.grasp);
+                }
+                records.push(record);
+            }
+        }
+        let picture = pictures.join(report::picture_name(p));
+        if !picture.is_file() {
+            let grasp_object = load(object, &mut loaded)?;
+            let rest = grasps::resting_poses(grasp_object)?;
+            let (_, pose) = rest.get(p.pose)?;
+            // Each policy's hand in its colour (the report's legend).
+            let hands: Vec<_> = first_seed
+                .iter()
+                .zip(report::POLICY_COLORS.iter().cycle())
+                .filter_map(|(g, &color)| g.map(|g| (g, color)))
+                .collect();
+            crate::grasp_image::write_colored_grasp_picture(
+                &picture,
+                grasp_object.mesh(),
+                &pose.table_from_object,
+                &hands,
+                &ready[0].gripper()?,
+            )?;
+        }
+    }
+    Ok((placed, records))
+}
+
+/// `object`'s mesh ready for the trial, loaded on first use.
+fn load<'a>(object: &ObjectRef, loaded: &'a mut Option<GraspObject>) -> Result<&'a GraspObject> {
+    if let Some(loaded) = loaded {
+        return Ok(loaded);
+    }
+    Ok(loaded.insert(GraspObject::new(object.load()?)?))
+}

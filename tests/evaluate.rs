@@ -1,0 +1,131 @@
+//! `evaluate`: the report from records, the same bytes whether a run was interrupted or not,
+//! and clear refusals.
+
+use std::path::{Path, PathBuf};
+
+use mvgrasp::evaluate::{EvalConfig, Progress, evaluate};
+use mvgrasp::geometry::objects::{Category, generate};
+use mvgrasp::geometry::write_obj;
+
+struct Quiet;
+
+impl Progress for Quiet {
+    fn step(&mut self, _: usize, _: usize, _: &str) {}
+}
+
+/// Two small built-in objects as mesh files in `dir/meshes`, and a config that plans on them
+/// with the depth planner, two seeds and the exhaustive search.
+fn two_objects(dir: &Path) -> EvalConfig {
+    let meshes = dir.join("meshes");
+    std::fs::create_dir_all(&meshes).unwrap();
+    for (category, index) in [(Category::Can, 30), (Category::Box, 31)] {
+        let object = generate(category, index, 0).unwrap();
+        write_obj(&object.mesh, meshes.join(format!("{}.obj", object.name))).unwrap();
+    }
+    EvalConfig {
+        sets: vec![format!("folder:{}", meshes.display())],
+        per_category: 0,
+        data: PathBuf::from("/nonexistent"),
+        max_meshes: 0,
+        policies: vec!["depth".into()],
+        seeds: vec![0, 1],
+        all_poses: false,
+        coverage: true,
+    }
+}
+
+fn files(out: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut names = vec![
+        "results.json".to_string(),
+        "report.md".into(),
+        "report.html".into(),
+    ];
+    let mut pictures: Vec<String> = std::fs::read_dir(out.join("pictures"))
+        .unwrap()
+        .map(|e| format!("pictures/{}", e.unwrap().file_name().to_string_lossy()))
+        .collect();
+    pictures.sort();
+    names.extend(pictures);
+    names
+        .into_iter()
+        .map(|n| {
+            let bytes = std::fs::read(out.join(&n)).unwrap();
+            (n, bytes)
+        })
+        .collect()
+}
+
+#[test]
+fn a_run_interrupted_and_resumed_writes_the_same_bytes_as_one_that_was_not() {
+    if crate::common::renderer().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let config = two_objects(dir.path());
+    let whole = dir.path().join("whole");
+    let results = evaluate(&config, &whole, &mut Quiet).unwrap();
+    assert_eq!(results.objects.len(), 2, "{:?}", results.skipped);
+    assert_eq!(results.grasps.len(), 4);
+    assert!(results.objects.iter().all(|p| p.holdable.is_some()));
+    let report = std::fs::read_to_string(whole.join("report.md")).unwrap();
+    assert!(
+        report.contains("| depth | `plan --depth-from rendered` |"),
+        "{report}"
+    );
+
+    // The interrupted run: its records up to the middle of the second object, the last line
+    // cut short; no report, no pictures.
+    let resumed = dir.path().join("resumed");
+    std::fs::create_dir_all(&resumed).unwrap();
+    std::fs::copy(whole.join("config.json"), resumed.join("config.json")).unwrap();
+    let records = std::fs::read_to_string(whole.join("records.jsonl")).unwrap();
+    let lines: Vec<&str> = records.lines().collect();
+    assert_eq!(
+        lines.len(),
+        2 + 4,
+        "a poses record per object, a grasp per seed"
+    );
+    let mut kept = lines[..4].join("\n");
+    kept.push('\n');
+    kept.push_str(&lines[4][..lines[4].len() / 2]);
+    std::fs::write(resumed.join("records.jsonl"), kept).unwrap();
+    evaluate(&config, &resumed, &mut Quiet).unwrap();
+    for ((name, a), (_, b)) in files(&whole).iter().zip(files(&resumed)) {
+        assert!(*a == b, "{name} differs after resuming");
+    }
+    assert_eq!(files(&whole).len(), files(&resumed).len());
+}
+
+#[test]
+fn a_folder_of_another_runs_settings_and_an_unknown_policy_are_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("report");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("config.json"), "{}").unwrap();
+    let run = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_evaluate"))
+            .args(args)
+            .args(["--plain", "--data", "/nonexistent"])
+            .output()
+            .unwrap()
+    };
+    let other = run(&["--out", out.to_str().unwrap(), "--set", "held-out"]);
+    let message = String::from_utf8_lossy(&other.stderr);
+    assert_eq!(other.status.code(), Some(2), "{message}");
+    assert!(
+        message.contains("config.json: this folder holds a run with other settings"),
+        "{message}"
+    );
+    let unknown = run(&[
+        "--out",
+        dir.path().join("x").to_str().unwrap(),
+        "--policy",
+        "sweep",
+    ]);
+    let message = String::from_utf8_lossy(&unknown.stderr);
+    assert_eq!(unknown.status.code(), Some(2), "{message}");
+    assert!(
+        message.contains("--policy sweep: expected one of rgb, depth"),
+        "{message}"
+    );
+}
