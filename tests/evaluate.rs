@@ -14,7 +14,8 @@ impl Progress for Quiet {
 }
 
 /// Two small built-in objects as mesh files in `dir/meshes`, and a config that plans on them
-/// with the depth planner, two seeds and the exhaustive search.
+/// with the depth planner, two seeds and the exhaustive search, and predicts their depth from
+/// 1 and 2 views.
 fn two_objects(dir: &Path) -> EvalConfig {
     let meshes = dir.join("meshes");
     std::fs::create_dir_all(&meshes).unwrap();
@@ -31,6 +32,9 @@ fn two_objects(dir: &Path) -> EvalConfig {
         seeds: vec![0, 1],
         all_poses: false,
         coverage: true,
+        suites: vec!["grasps".into(), "depth".into()],
+        depth_views: vec![1, 2],
+        depth_distance_m: 0.5,
     }
 }
 
@@ -82,12 +86,12 @@ fn a_run_interrupted_and_resumed_writes_the_same_bytes_as_one_that_was_not() {
     let lines: Vec<&str> = records.lines().collect();
     assert_eq!(
         lines.len(),
-        2 + 4,
-        "a poses record per object, a grasp per seed"
+        2 * (1 + 2 + 1),
+        "per object: its poses, a grasp per seed, its depth"
     );
-    let mut kept = lines[..4].join("\n");
+    let mut kept = lines[..5].join("\n");
     kept.push('\n');
-    kept.push_str(&lines[4][..lines[4].len() / 2]);
+    kept.push_str(&lines[5][..lines[5].len() / 2]);
     std::fs::write(resumed.join("records.jsonl"), kept).unwrap();
     evaluate(&config, &resumed, &mut Quiet).unwrap();
     for ((name, a), (_, b)) in files(&whole).iter().zip(files(&resumed)) {

@@ -62,6 +62,16 @@ struct Args {
     /// The exhaustive search on the true mesh for a grasp that holds (coverage).
     #[arg(long)]
     coverage: bool,
+    /// A suite (repeat): grasps (plans checked in the trial), depth (depth from RGB against
+    /// the rendered depth). Default: both.
+    #[arg(long = "suite")]
+    suites: Vec<String>,
+    /// The depth suite's numbers of input views (default: 1,3,5,9).
+    #[arg(long, value_delimiter = ',')]
+    depth_views: Vec<usize>,
+    /// The depth suite's camera distance, metres (default: 0.5, the paper's test views).
+    #[arg(long)]
+    depth_distance_m: Option<f32>,
     /// Plain progress lines even on a terminal.
     #[arg(long)]
     plain: bool,
@@ -108,6 +118,15 @@ fn config_of(args: &Args) -> EvalConfig {
     if !args.seeds.is_empty() {
         config.seeds.clone_from(&args.seeds);
     }
+    if !args.suites.is_empty() {
+        config.suites.clone_from(&args.suites);
+    }
+    if !args.depth_views.is_empty() {
+        config.depth_views.clone_from(&args.depth_views);
+    }
+    if let Some(d) = args.depth_distance_m {
+        config.depth_distance_m = d;
+    }
     config.all_poses |= args.all_poses;
     config.coverage |= args.coverage;
     config
@@ -141,9 +160,10 @@ fn run(args: &Args) -> Result<(), String> {
         eprintln!("not evaluated: {object}: {why}");
     }
     println!(
-        "{} plans on {} objects and poses: {}",
+        "{} plans on {} objects and poses, {} depth records: {}",
         results.grasps.len(),
         results.objects.len(),
+        results.depth.len(),
         args.out.join("report.md").display()
     );
     Ok(())

@@ -9,6 +9,7 @@
 //! a failure. With `coverage`, an exhaustive search on the true mesh says which objects some
 //! grasp in reach can hold.
 
+pub mod depth;
 pub mod grasps;
 pub mod journal;
 pub mod objects;
@@ -45,7 +46,33 @@ pub struct EvalConfig {
     pub all_poses: bool,
     /// The exhaustive search for a grasp that holds, per object and pose (coverage).
     pub coverage: bool,
+    /// The suites to run: `grasps`, `depth`.
+    #[serde(default = "grasps_only")]
+    pub suites: Vec<String>,
+    /// The depth suite's numbers of input views.
+    #[serde(default = "paper_shots")]
+    pub depth_views: Vec<usize>,
+    /// The depth suite's camera distance, metres (the paper's test views: 0.5).
+    #[serde(default = "paper_distance_m")]
+    pub depth_distance_m: f32,
 }
+
+/// The suites of a config written before the depth suite was one.
+fn grasps_only() -> Vec<String> {
+    vec!["grasps".into()]
+}
+
+/// The seed paper's Table 1 shots and the planner's 5 views.
+fn paper_shots() -> Vec<usize> {
+    vec![1, 3, 5, 9]
+}
+
+fn paper_distance_m() -> f32 {
+    0.5
+}
+
+/// The suites [`evaluate`] knows.
+pub const SUITES: [&str; 2] = ["grasps", "depth"];
 
 impl EvalConfig {
     /// The small default: 1 held-out built-in object per category and the first 6 real meshes,
@@ -60,6 +87,9 @@ impl EvalConfig {
             seeds: vec![0],
             all_poses: false,
             coverage: false,
+            suites: SUITES.map(String::from).to_vec(),
+            depth_views: paper_shots(),
+            depth_distance_m: paper_distance_m(),
         }
     }
 }
@@ -90,6 +120,8 @@ pub struct Results {
     pub objects: Vec<PlacedObject>,
     /// Each plan and its trial.
     pub grasps: Vec<GraspRecord>,
+    /// The depth suite's records, per object and number of views.
+    pub depth: Vec<depth::DepthRecord>,
     /// Objects that could not be evaluated, and why.
     pub skipped: Vec<(String, String)>,
 }
@@ -115,6 +147,16 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
         .collect::<Result<_>>()?;
     if policies.is_empty() || config.seeds.is_empty() {
         return Err(invalid("no policy or no seed to evaluate".into()));
+    }
+    if let Some(suite) = config.suites.iter().find(|s| !SUITES.contains(&s.as_str())) {
+        return Err(invalid(format!(
+            "suite {suite:?}: expected grasps or depth"
+        )));
+    }
+    if let Some(n) = config.depth_views.iter().find(|n| !(1..=10).contains(*n)) {
+        return Err(invalid(format!(
+            "depth views {n}: expected 1 to 10 (there are 10 test views)"
+        )));
     }
     let mut objects: Vec<ObjectRef> = Vec::new();
     for set in &sets {
@@ -150,27 +192,59 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
             .collect(),
         objects: Vec::new(),
         grasps: Vec::new(),
+        depth: Vec::new(),
         skipped: Vec::new(),
+    };
+    let run_grasps = config.suites.iter().any(|s| s == "grasps");
+    let depth_suite = if config.suites.iter().any(|s| s == "depth") {
+        Some(depth::DepthSuite::new(config.depth_distance_m)?)
+    } else {
+        None
     };
     let total = objects.len();
     for (done, object) in objects.iter().enumerate() {
         let id = format!("{}|{}", object.set, object.name);
-        match evaluate_object(
-            object,
-            &id,
-            config,
-            &ready,
-            &renderer,
-            &mut journal,
-            &pictures,
-        ) {
-            Ok((placed, records)) => {
+        let mut work = || -> Result<()> {
+            if run_grasps {
+                let (placed, records) = evaluate_object(
+                    object,
+                    &id,
+                    config,
+                    &ready,
+                    &renderer,
+                    &mut journal,
+                    &pictures,
+                )?;
                 results.objects.extend(placed);
                 results.grasps.extend(records);
             }
-            // An object the evaluation cannot use (a broken mesh file) is reported, not fatal.
-            Err(Error::Evaluate { problem }) => results.skipped.push((id, problem)),
-            Err(e) => results.skipped.push((id, e.to_string())),
+            if let Some(suite) = &depth_suite {
+                let key = format!("depth|{id}");
+                let records: Vec<depth::DepthRecord> = match journal.get(&key)? {
+                    Some(records) => records,
+                    None => {
+                        let mesh = object.load()?;
+                        let records = suite.run(
+                            &renderer,
+                            (&object.set, &object.name),
+                            &mesh,
+                            &config.depth_views,
+                            0,
+                        )?;
+                        journal.put(&key, &records)?
+                    }
+                };
+                results.depth.extend(records);
+            }
+            Ok(())
+        };
+        // An object the evaluation cannot use (a broken mesh file) is reported, not fatal.
+        if let Err(e) = work() {
+            let why = match e {
+                Error::Evaluate { problem } => problem,
+                e => e.to_string(),
+            };
+            results.skipped.push((id, why));
         }
         progress.step(done + 1, total, &format!("{} {}", object.set, object.name));
     }
@@ -184,7 +258,9 @@ fn check_config(config: &EvalConfig, out: &Path) -> Result<()> {
     let text =
         serde_json::to_string_pretty(config).map_err(Error::json("write", "config", &path))?;
     match std::fs::read_to_string(&path) {
-        Ok(found) if found == text => Ok(()),
+        Ok(found) if serde_json::from_str::<EvalConfig>(&found).is_ok_and(|c| c == *config) => {
+            Ok(())
+        }
         Ok(_) => Err(Error::Evaluate {
             problem: format!(
                 "{}: this folder holds a run with other settings; choose another --out or \

@@ -157,6 +157,12 @@ pub fn markdown(results: &Results) -> String {
         results.objects.len(),
         results.grasps.len()
     );
+    if !results.depth.is_empty() {
+        depth_tables(&mut md, results);
+    }
+    if results.grasps.is_empty() {
+        return md;
+    }
     let _ = writeln!(md, "## Grasps\n");
     let _ = writeln!(
         md,
@@ -354,6 +360,67 @@ pub fn markdown(results: &Results) -> String {
         );
     }
     md
+}
+
+/// The depth suite's tables: per set, the seed paper's Table 1 layout for every method.
+fn depth_tables(md: &mut String, results: &Results) {
+    use super::depth::{DepthErrors, METHODS};
+    let _ = writeln!(
+        md,
+        "## Depth from RGB\n\nDepth predicted from the first N of the seed paper's 10 test views \
+         ({:.2} m away, the first top-down; random colours, masks given) against the rendered \
+         depth, over the object's pixels: the median and mean error of the predicted pixels \
+         (mm), the share of object pixels predicted, the share within 5 mm (a missing pixel is \
+         not within), and the paper's normalised error (mean error over mean true depth). \
+         `sweep`: the plane sweep as `plan --rgb` uses it (unconfirmed pixels missing); \
+         `sweep-hull`: as the default run plans on it (unconfirmed pixels at the visual hull's \
+         depth); `hull`: the visual hull alone; `lsm`, `mvs`: the shipped networks.\n",
+        results.config.depth_distance_m
+    );
+    let mut sets: Vec<&str> = results.depth.iter().map(|r| r.set.as_str()).collect();
+    sets.dedup();
+    for set in sets {
+        let records: Vec<_> = results.depth.iter().filter(|r| r.set == set).collect();
+        let objects = records
+            .iter()
+            .map(|r| r.object.as_str())
+            .collect::<std::collections::BTreeSet<_>>()
+            .len();
+        let _ = writeln!(md, "### {set} ({objects} objects)\n");
+        let _ = writeln!(
+            md,
+            "| method | views | top-down: median (mm) | mean (mm) | predicted | within 5 mm | normalised | all views: median (mm) | mean (mm) | predicted | within 5 mm | normalised |\n|---|---|---|---|---|---|---|---|---|---|---|---|"
+        );
+        for &n in &results.config.depth_views {
+            for method in METHODS {
+                let (mut top, mut all) = (DepthErrors::default(), DepthErrors::default());
+                let mut found = false;
+                for r in records.iter().filter(|r| r.views == n) {
+                    for (m, t, a) in r.methods.iter().filter(|(m, ..)| m == method) {
+                        let _ = m;
+                        top.merge(t);
+                        all.merge(a);
+                        found = true;
+                    }
+                }
+                if !found {
+                    continue;
+                }
+                let cells = |e: &DepthErrors| {
+                    format!(
+                        "{:.1} | {:.1} | {:.0}% | {:.0}% | {:.4}",
+                        e.median_mm(),
+                        e.mean_mm(),
+                        100.0 * e.predicted_share(),
+                        100.0 * e.within_5mm_share(),
+                        e.normalised()
+                    )
+                };
+                let _ = writeln!(md, "| {method} | {n} | {} | {} |", cells(&top), cells(&all));
+            }
+        }
+        md.push('\n');
+    }
 }
 
 /// The set of the object `r` was planned on (records are unique per set and name; the

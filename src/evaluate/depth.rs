@@ -1,0 +1,270 @@
+//! The depth suite: depth predicted from RGB views against the rendered depth, over the
+//! object's pixels, per method and number of views (the seed paper's Table 1: the top-down
+//! view and every view scored).
+//!
+//! Each object rests in its most probable pose and is seen by the paper's 10 test views (the
+//! first top-down) at the suite's distance, in random colours with its masks; depth is
+//! predicted from the first N views. Methods: `lsm` (the shipped Learnt Stereo Machine, the
+//! only one that takes one view), `mvs` (the shipped multi-view stereo network, every pixel
+//! kept), `sweep` (the plane sweep as `plan --rgb` and `predict_depth` use it: unconfirmed
+//! pixels missing), `sweep-hull` (as the default run's one-view planner gets it: unconfirmed
+//! pixels at the visual hull's depth) and `hull` (the visual hull alone).
+
+use mvgrasp_geometry::{HemisphereLayout, Intrinsics, IntrinsicsPreset};
+use mvgrasp_infer::Parallelism;
+use mvgrasp_render::Renderer;
+use serde::{Deserialize, Serialize};
+
+use crate::error::Result;
+use crate::lsm::lsm_depths;
+use crate::mvs::mvs_depths;
+use crate::planner::{DepthPredictor, RgbInput, models, render_rgb};
+use crate::stereo::{RgbView, SweepParams, sweep_depths};
+
+/// The methods, in the report's order.
+pub const METHODS: [&str; 5] = ["lsm", "mvs", "sweep", "sweep-hull", "hull"];
+
+/// Error bins of the median, metres (0.1 mm), and their count (the last: 50 mm and more).
+const BIN_M: f64 = 1e-4;
+const BINS: usize = 501;
+
+/// One method's errors over the object pixels of some views.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct DepthErrors {
+    /// Object pixels with a true depth.
+    pub object_pixels: u64,
+    /// Those the method predicted.
+    pub predicted: u64,
+    /// Sum of the predicted pixels' absolute errors, metres.
+    pub abs_error_m: f64,
+    /// Sum of the object pixels' true depths, metres (the paper's normalisation).
+    pub true_depth_m: f64,
+    /// Object pixels predicted within 2 mm.
+    pub within_2mm: u64,
+    /// Object pixels predicted within 5 mm.
+    pub within_5mm: u64,
+    /// Predicted pixels by error in 0.1 mm bins (the last: 50 mm and more), trailing zeros cut.
+    pub histogram: Vec<u32>,
+}
+
+impl DepthErrors {
+    /// Adds `predicted` against `truth` over the pixels of `mask`.
+    pub fn add(&mut self, predicted: &[f32], truth: &[f32], mask: &[bool]) {
+        let mut histogram = std::mem::take(&mut self.histogram);
+        histogram.resize(BINS, 0);
+        for ((&p, &t), &m) in predicted.iter().zip(truth).zip(mask) {
+            if !m || t <= 0.0 {
+                continue;
+            }
+            self.object_pixels += 1;
+            self.true_depth_m += f64::from(t);
+            if p > 0.0 {
+                let e = f64::from((p - t).abs());
+                self.predicted += 1;
+                self.abs_error_m += e;
+                self.within_2mm += u64::from(e <= 2e-3);
+                self.within_5mm += u64::from(e <= 5e-3);
+                histogram[((e / BIN_M) as usize).min(BINS - 1)] += 1;
+            }
+        }
+        let used = histogram.iter().rposition(|&c| c > 0).map_or(0, |i| i + 1);
+        histogram.truncate(used);
+        self.histogram = histogram;
+    }
+
+    /// Adds another tally.
+    pub fn merge(&mut self, other: &Self) {
+        self.object_pixels += other.object_pixels;
+        self.predicted += other.predicted;
+        self.abs_error_m += other.abs_error_m;
+        self.true_depth_m += other.true_depth_m;
+        self.within_2mm += other.within_2mm;
+        self.within_5mm += other.within_5mm;
+        if self.histogram.len() < other.histogram.len() {
+            self.histogram.resize(other.histogram.len(), 0);
+        }
+        for (a, b) in self.histogram.iter_mut().zip(&other.histogram) {
+            *a += b;
+        }
+    }
+
+    /// The median error of the predicted pixels, millimetres (to 0.1 mm; NaN when none).
+    pub fn median_mm(&self) -> f64 {
+        let half = self.predicted.div_ceil(2);
+        let mut seen = 0u64;
+        for (bin, &count) in self.histogram.iter().enumerate() {
+            seen += u64::from(count);
+            if seen >= half && count > 0 {
+                return (bin as f64 + 0.5) * BIN_M * 1e3;
+            }
+        }
+        f64::NAN
+    }
+
+    /// The mean error of the predicted pixels, millimetres.
+    pub fn mean_mm(&self) -> f64 {
+        1e3 * self.abs_error_m / self.predicted.max(1) as f64
+    }
+
+    /// The share of object pixels predicted.
+    pub fn predicted_share(&self) -> f64 {
+        self.predicted as f64 / self.object_pixels.max(1) as f64
+    }
+
+    /// The share of object pixels predicted within 5 mm (a missing pixel is not within).
+    pub fn within_5mm_share(&self) -> f64 {
+        self.within_5mm as f64 / self.object_pixels.max(1) as f64
+    }
+
+    /// The paper's normalised error: the mean error over the mean true depth.
+    pub fn normalised(&self) -> f64 {
+        let mean_depth = self.true_depth_m / self.object_pixels.max(1) as f64;
+        self.abs_error_m / self.predicted.max(1) as f64 / mean_depth.max(f64::MIN_POSITIVE)
+    }
+}
+
+/// One object's depth errors for one number of views: per method, over the top-down view and
+/// over all the input views.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DepthRecord {
+    /// The object's name in its set.
+    pub object: String,
+    /// The set's name.
+    pub set: String,
+    /// Input views.
+    pub views: usize,
+    /// Per method of [`METHODS`] that takes this many views: (method, top-down, all views).
+    pub methods: Vec<(String, DepthErrors, DepthErrors)>,
+}
+
+/// The suite's prepared networks and settings.
+pub struct DepthSuite {
+    lsm: mvgrasp_infer::Lsm,
+    mvs: mvgrasp_infer::Mvs,
+    layout: HemisphereLayout,
+    input: RgbInput,
+}
+
+impl DepthSuite {
+    /// The shipped networks and the paper's test views at `distance_m`.
+    ///
+    /// # Errors
+    /// Shipped weights that cannot be loaded.
+    pub fn new(distance_m: f32) -> Result<Self> {
+        Ok(Self {
+            lsm: models::LSM
+                .load()?
+                .with_parallelism(Parallelism::all_threads()),
+            mvs: models::MVS
+                .load()?
+                .with_parallelism(Parallelism::all_threads()),
+            layout: HemisphereLayout {
+                radius_m: distance_m,
+                ..HemisphereLayout::paper_test()
+            },
+            input: RgbInput {
+                depth: DepthPredictor::Baseline(SweepParams::default()),
+                per_face: false,
+            },
+        })
+    }
+
+    /// The records of `mesh` (named `object` in `set`), one per number of `views`; the
+    /// cameras and colours seeded by `seed`.
+    ///
+    /// # Errors
+    /// A mesh with no stable pose, or a renderer or network error.
+    pub fn run(
+        &self,
+        renderer: &Renderer,
+        (set, object): (&str, &str),
+        mesh: &mvgrasp_geometry::TriangleMesh,
+        views: &[usize],
+        seed: u64,
+    ) -> Result<Vec<DepthRecord>> {
+        let rest = mvgrasp_geometry::RestingPoses::of(mesh)?;
+        let (_, pose) = rest.get(0)?;
+        let com = mesh.mass_facts(1000.0)?.center_of_mass;
+        let target = pose.table_from_object.transform_point(com);
+        let intrinsics = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
+        let cameras = self.layout.cameras(intrinsics, target, seed)?;
+        let rendered = render_rgb(
+            renderer,
+            mesh,
+            &pose.table_from_object,
+            &cameras,
+            &self.input,
+            seed,
+        )?;
+        let hull_fill = SweepParams {
+            hull_where_unconfirmed: true,
+            ..SweepParams::default()
+        };
+        views
+            .iter()
+            .map(|&n| {
+                let n = n.clamp(1, rendered.len());
+                let input: Vec<RgbView> = rendered[..n].iter().map(|(v, _)| v.clone()).collect();
+                // (method, each view's depth)
+                let mut predicted: Vec<(&str, Vec<Vec<f32>>)> =
+                    vec![("lsm", lsm_depths(&self.lsm, &input)?)];
+                if n >= 2 {
+                    let mvs = mvs_depths(&self.mvs, &input, 0.0)?;
+                    predicted.push(("mvs", mvs.into_iter().map(|v| v.depth_m).collect()));
+                    let swept = sweep_depths(&input, &SweepParams::default())?;
+                    let filled = sweep_depths(&input, &hull_fill)?;
+                    predicted.push(("sweep", swept.iter().map(|s| s.depth_m.clone()).collect()));
+                    predicted.push((
+                        "sweep-hull",
+                        filled.into_iter().map(|s| s.depth_m).collect(),
+                    ));
+                    predicted.push(("hull", swept.into_iter().map(|s| s.hull_m).collect()));
+                }
+                let methods = predicted
+                    .into_iter()
+                    .map(|(method, depths)| {
+                        let (mut top, mut all) = (DepthErrors::default(), DepthErrors::default());
+                        for (i, (depth, (view, truth))) in depths.iter().zip(&rendered).enumerate()
+                        {
+                            let mask = view.mask.as_deref().unwrap_or(&[]);
+                            if i == 0 {
+                                top.add(depth, truth, mask);
+                            }
+                            all.add(depth, truth, mask);
+                        }
+                        (method.to_string(), top, all)
+                    })
+                    .collect();
+                Ok(DepthRecord {
+                    object: object.to_string(),
+                    set: set.to_string(),
+                    views: n,
+                    methods,
+                })
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn errors_count_missing_pixels_against_the_share_and_merge_into_one_median() {
+        let truth = [0.5f32, 0.5, 0.5, 0.5, 0.0];
+        let mask = [true, true, true, true, true];
+        let mut a = DepthErrors::default();
+        // 1 mm, 3 mm, 10 mm off, and one missing; the last pixel has no true depth.
+        a.add(&[0.501, 0.503, 0.51, 0.0, 0.4], &truth, &mask);
+        assert_eq!((a.object_pixels, a.predicted), (4, 3));
+        assert_eq!((a.within_2mm, a.within_5mm), (1, 2));
+        assert!((a.median_mm() - 3.05).abs() < 0.06, "{}", a.median_mm());
+        assert!((a.within_5mm_share() - 0.5).abs() < 1e-9);
+        let mut b = DepthErrors::default();
+        b.add(&[0.5001, 0.5001, 0.5001, 0.5001, 0.0], &truth, &mask);
+        a.merge(&b);
+        assert_eq!(a.predicted, 7);
+        assert!(a.median_mm() < 1.0, "{}", a.median_mm());
+    }
+}
