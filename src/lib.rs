@@ -5,8 +5,10 @@
 //! analytically and in physics), the RGB-D and grasp dataset generators, and the command-line
 //! tools; the work is done by the layered crates it re-exports (see ARCHITECTURE.md):
 //! [`geometry`], [`render`], [`grasp`], [`infer`], and `mvgrasp_planner` (planning on depth
-//! images from any source; its types are re-exported in [`planner`]). Depth comes from the renderer today; the Learnt Stereo Machine's depth
-//! from RGB is not built yet.
+//! images from any source; its types are re-exported in [`planner`]). Depth comes from the
+//! renderer or a sensor, or is predicted from RGB views: the plane sweep ([`stereo`], the
+//! default), the multi-view stereo network ([`mvs`]) or the Learnt Stereo Machine ([`lsm`]).
+//! [`evaluate`] is the project's evaluation (the `evaluate` command).
 
 pub mod cli;
 pub mod convert;

@@ -14,7 +14,7 @@ use mvgrasp::mvs::mvs_depths;
 use mvgrasp::planner::{DepthFrom, DepthPredictor};
 
 /// The shipped MVS network's median error on a box's top-down view must stay under this
-/// (README, "Depth from RGB views": a median of 14 mm on unseen objects, top-down, 5 views).
+/// (docs/depth-from-rgb.md: a median of 14 mm on unseen objects, top-down, 5 views).
 const MVS_TOP_DOWN_MEDIAN_M: f32 = 0.02;
 use mvgrasp::stereo::{SweepParams, sweep_depths};
 
@@ -156,7 +156,7 @@ fn the_shipped_lsm_predicts_the_box_within_its_measured_error_and_plan_rgb_runs_
     );
     // One view: the grid centred on its axis above the table; every box pixel predicted, the
     // median error under 3 cm (from one view the network averages 26 mm on unseen objects,
-    // README).
+    // docs/depth-from-rgb.md).
     let one = lsm.depths(&rgb[..1]).unwrap();
     let mask = rgb[0].mask.as_ref().unwrap();
     let mut errors: Vec<f32> = (0..mask.len())
@@ -194,7 +194,7 @@ fn the_shipped_mvs_predicts_the_box_within_its_measured_error_and_marks_doubt_as
     let predicted = mvs_depths(net, &rgb[..5], 0.0).unwrap();
     assert_eq!(predicted.len(), 5);
     // The top-down view's box pixels: every one predicted, the median error within the
-    // network's measured accuracy (README: MVS_TOP_DOWN_MEDIAN_M on unseen objects from 5
+    // network's measured accuracy (docs/depth-from-rgb.md: MVS_TOP_DOWN_MEDIAN_M on unseen objects from 5
     // views); off the box the table plane (the mask), with full confidence.
     let mask = rgb[0].mask.as_ref().unwrap();
     let truth0 = truth[0].depth.as_slice();

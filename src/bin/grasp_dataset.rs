@@ -17,7 +17,7 @@ use mvgrasp::grasp_dataset::preview::write_preview;
 use mvgrasp::grasp_dataset::{DatasetPlan, GraspDatasetConfig, generate, generate_shard};
 use mvgrasp::render::{Backend, Renderer};
 
-/// Generate a grasp dataset (see the README's "Grasp datasets").
+/// Generate a grasp dataset (see docs/datasets-and-training.md).
 #[derive(Parser, Debug)]
 #[command(version, about)]
 struct Args {

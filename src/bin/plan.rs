@@ -118,7 +118,7 @@ struct Args {
     /// planner in all), and the summary also gives the same run on the rendered depth.
     #[arg(long, conflicts_with_all = ["depth", "views_dir"])]
     depth_from: Option<String>,
-    /// Write `grasps.json` (the ranked grasps with their poses; README, "grasps.json") and, for
+    /// Write `grasps.json` (the ranked grasps with their poses; docs/planning.md, "grasps.json") and, for
     /// sensor depth, a picture of the best grasps over each view (`overlay_N.png`) and an MCAP
     /// log for robot tooling (`plan.mcap`: depth, calibrations, poses, table, grasps) into this
     /// folder.

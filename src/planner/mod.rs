@@ -1,6 +1,8 @@
-//! Grasp planning from depth images: the depth-image antipodal sampler ([`sampler`]), the
-//! GQ-CNN policy over one or many views ([`policy`]), and the networks that ship with mvgrasp
-//! ([`models`]).
+//! The planning pipeline: a plan's options ([`options`]), a mesh rendered on the table and
+//! planned on ([`pipeline`]), depth predicted from RGB views ([`rgb`]) and a sensor's depth
+//! images ([`sensor`]). The planning on depth images itself (the sampler, the GQ-CNN policies,
+//! the fused multi-view planner, the shipped networks) is `mvgrasp_planner`'s, re-exported
+//! here.
 
 pub mod options;
 pub mod pipeline;

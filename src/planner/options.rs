@@ -44,8 +44,8 @@ pub struct PlanOptions {
     /// predictor; `None`: on the rendered depth. The depth is predicted from [`FUSED_VIEWS`]
     /// views (the first top-down) unless told otherwise, and without `fuse` the network plans
     /// in the top-down one alone, the views at its own distance (0.7 m for the top-down
-    /// GQ-CNN), with `fuse` at the multi-view planner's 0.65 m (README, "Depth from RGB
-    /// views": the top-down GQ-CNN's grasps on predicted depth held at least as often as the
+    /// GQ-CNN), with `fuse` at the multi-view planner's 0.65 m (docs/depth-from-rgb.md:
+    /// the top-down GQ-CNN's grasps on predicted depth held at least as often as the
     /// multi-view planner's).
     pub depth_from: Option<DepthFrom>,
 }
@@ -122,7 +122,7 @@ impl PlanOptions {
             // Depth from RGB for a network planning in one view: as many views for the stereo,
             // at the planning network's own distance (the top-down GQ-CNN's 0.7 m: its grasps
             // held 64% of the time on the baseline's depth there, 62% at the multi-view
-            // planner's 0.65 m; README, "Depth from RGB views").
+            // planner's 0.65 m; docs/depth-from-rgb.md).
             setting.views = FUSED_VIEWS;
         }
         let mut params = PlanParams {

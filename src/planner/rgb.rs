@@ -131,8 +131,8 @@ impl std::str::FromStr for DepthFrom {
 
 impl DepthFrom {
     /// The predictor of `plan`'s default run and of `plan --rgb` without `--depth-from`: the
-    /// one whose depth gave the grasps that held most often on held-out objects (README,
-    /// "Depth from RGB views").
+    /// one whose depth gave the grasps that held most often on held-out objects
+    /// (docs/depth-from-rgb.md).
     pub const DEFAULT: Self = Self::Baseline;
 
     /// Its name on the command line and in summaries.
@@ -164,7 +164,7 @@ pub enum DepthPredictor {
 /// The shipped multi-view stereo network's confidence threshold: pixels below it are left
 /// missing (unseen space for the planner). 0, every pixel kept: the shipped network's
 /// confidence is not calibrated (of the object pixels it gives 0.9 or more, 28% are within
-/// 5 mm; README, "Depth from RGB views").
+/// 5 mm; docs/depth-from-rgb.md).
 pub const MVS_MIN_CONFIDENCE: f32 = 0.0;
 
 impl PartialEq for DepthPredictor {

@@ -148,4 +148,4 @@ if [[ $quick == 1 ]]; then
     echo "QUICK=1: exports in $runs (models/ unchanged)"
     exit 0
 fi
-echo "models/ rewritten; next: cargo test (parity with torch), then re-measure models/README.md and the README's figures"
+echo "models/ rewritten; next: cargo test (parity with torch), then re-measure models/README.md and the report (cargo run --release --bin evaluate)"

@@ -3,7 +3,7 @@
 //! observed surface ([`Fusion`]). Hidden space counts as solid, so the mesh is the largest
 //! object the views are consistent with (a visual hull carved by depth). `plan_eval
 //! --dump-recon` tries each candidate in the physics trial on it; choosing by that trial did
-//! not pick grasps that held more often (README, "The multi-view planner"), so the planner
+//! not pick grasps that held more often (docs/planning.md, the fused multi-view planner), so the planner
 //! does not use it.
 
 use std::collections::VecDeque;

@@ -32,7 +32,7 @@ pub struct ShapeParams {
     /// can end with the fingers 0 to 3 cm apart, whatever the slabs' thickness): rapier's
     /// contacts with thin convex parts come from parry 0.31's GJK, which misreads them (the
     /// trial's approach backs it with separating axes, `crate::separation`; the contacts
-    /// cannot be). See the README's physics section.
+    /// cannot be). See docs/grasp-analysis.md, the physics trial.
     pub shell: bool,
     /// No part may stand further than this outside the mesh, metres.
     pub tolerance_m: f32,
