@@ -228,6 +228,7 @@ pub fn markdown(results: &Results) -> String {
             super::grasps::REACH_TILT_DEG
         );
     }
+    calibration_table(&mut md, results);
     // Per category or source, and per pose kind.
     let by = |key: &dyn Fn(&PlacedObject) -> String| {
         let mut table: BTreeMap<String, Vec<Tally>> = BTreeMap::new();
@@ -360,6 +361,59 @@ pub fn markdown(results: &Results) -> String {
         );
     }
     md
+}
+
+/// Upper ends of the calibration table's quality bins.
+const QUALITY_BINS: [f32; 6] = [0.5, 0.7, 0.8, 0.9, 0.95, 1.0];
+
+/// Per policy, the returned grasps' predicted quality against how often they held, in bins,
+/// and the expected calibration error (the bins' gaps weighted by their grasps).
+fn calibration_table(md: &mut String, results: &Results) {
+    let _ = writeln!(
+        md,
+        "\n### Calibration (the returned grasp's predicted quality against held)\n\nPer bin of \
+         predicted quality: grasps returned and tried, their mean quality, the share that held. \
+         ECE: the expected calibration error, the bins' |mean quality - share held| weighted \
+         by their grasps.\n"
+    );
+    let mut header = String::from("| policy |");
+    let mut lower = 0.0;
+    for upper in QUALITY_BINS {
+        let _ = write!(header, " {lower:.2}-{upper:.2} |");
+        lower = upper;
+    }
+    let _ = writeln!(
+        md,
+        "{header} ECE |\n|---|{}---|",
+        "---|".repeat(QUALITY_BINS.len())
+    );
+    for (name, ..) in &results.policies {
+        // (grasps, quality sum, held) per bin
+        let mut bins = [(0usize, 0.0f64, 0usize); QUALITY_BINS.len()];
+        for r in results.grasps.iter().filter(|r| &r.policy == name && r.counts()) {
+            let Some(q) = r.quality else { continue };
+            let bin = QUALITY_BINS
+                .iter()
+                .position(|&upper| q < upper)
+                .unwrap_or(QUALITY_BINS.len() - 1);
+            bins[bin].0 += 1;
+            bins[bin].1 += f64::from(q);
+            bins[bin].2 += usize::from(r.held());
+        }
+        let total: usize = bins.iter().map(|b| b.0).sum();
+        let mut ece = 0.0;
+        let mut row = format!("| {name} |");
+        for &(n, quality, held) in &bins {
+            if n == 0 {
+                row.push_str(" - |");
+                continue;
+            }
+            let (mean, rate) = (quality / n as f64, held as f64 / n as f64);
+            ece += n as f64 / total.max(1) as f64 * (mean - rate).abs();
+            let _ = write!(row, " {n}: {mean:.2} / {:.0}% |", 100.0 * rate);
+        }
+        let _ = writeln!(md, "{row} {:.1} points |", 100.0 * ece);
+    }
 }
 
 /// The depth suite's tables: per set, the seed paper's Table 1 layout for every method.
