@@ -127,3 +127,17 @@ def test_several_views_name_the_bad_one() -> None:
     turned[:3, :3] = [[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]]
     with pytest.raises(mvgrasp.PlanningError, match="z axis is 90 degrees"):
         mvgrasp.plan_views([depth], [PRIMESENSE_K], [turned @ pose], fuse=True)
+
+
+def test_an_image_of_another_size_than_its_camera_is_refused_with_both_sizes() -> None:
+    camera = mvgrasp.Camera.preset("primesense")
+    planner = mvgrasp.Planner()
+    half = box_on_table()[::2, ::2]
+    with pytest.raises(ValueError, match=r"depth: 320 x 240 pixels, but camera is 640 x 480"):
+        planner.plan(half, camera)
+    posed = mvgrasp.Camera(camera.k, camera.width, camera.height, np.eye(4))
+    with pytest.raises(ValueError, match=r"depths\[1\]: 320 x 240 pixels, but cameras\[1\]"):
+        planner.plan_views([box_on_table(), half], [posed, posed])
+    rgb = np.zeros((240, 320, 3), dtype=np.uint8)
+    with pytest.raises(ValueError, match=r"images\[0\]: 320 x 240 pixels"):
+        planner.plan_rgb([rgb, rgb], [posed, posed])

@@ -153,6 +153,18 @@ class PlanResult:
         )
 
 
+def _check_size(name: str, image: npt.ArrayLike, camera: Camera, camera_name: str) -> None:
+    """``ValueError`` naming both when ``image``'s (H, W) is not ``camera``'s size (a depth
+    image at half resolution must come with its halved intrinsics, as ``plan --depth`` asks)."""
+    shape = np.shape(image)
+    if len(shape) >= 2 and (shape[0], shape[1]) != (camera.height, camera.width):
+        raise ValueError(
+            f"{name}: {shape[1]} x {shape[0]} pixels, but {camera_name} is "
+            f"{camera.width} x {camera.height} (width x height): give the camera the image "
+            "was taken with"
+        )
+
+
 def _posed(cameras: Sequence[Camera]) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """The cameras' matrices and poses; ``ValueError`` for a camera without a pose."""
     for i, c in enumerate(cameras):
@@ -202,6 +214,7 @@ class Planner:
         matrix. Without a pose the world is put on the table fitted in the image (frame
         ``estimated``)."""
         if isinstance(camera, Camera):
+            _check_size("depth", depth, camera, "camera")
             k = camera.k
             if world_from_camera is None:
                 world_from_camera = camera.world_from_camera
@@ -227,6 +240,8 @@ class Planner:
     ) -> PlanResult:
         """Plans over several depth images of one scene with their posed cameras (one world
         frame; with ``fuse`` its z up from the table), as ``plan --views-dir`` does."""
+        for i, (d, c) in enumerate(zip(depths, cameras)):
+            _check_size(f"depths[{i}]", d, c, f"cameras[{i}]")
         started = time.perf_counter()
         text = _native.plan_views(
             [f32(d) for d in depths],
@@ -251,6 +266,8 @@ class Planner:
         carving and a plane sweep), the shipped multi-view stereo network (``"mvs"``) or the
         shipped Learnt Stereo Machine (``"lsm"``), then the multi-view planner
         (``fuse`` is implied). ``masks``: per view the object's pixels, or ``None``."""
+        for i, (image, c) in enumerate(zip(images, cameras)):
+            _check_size(f"images[{i}]", image, c, f"cameras[{i}]")
         started = time.perf_counter()
         options = self._options()
         options.pop("fuse")
