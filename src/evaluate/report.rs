@@ -390,7 +390,11 @@ fn calibration_table(md: &mut String, results: &Results) {
     for (name, ..) in &results.policies {
         // (grasps, quality sum, held) per bin
         let mut bins = [(0usize, 0.0f64, 0usize); QUALITY_BINS.len()];
-        for r in results.grasps.iter().filter(|r| &r.policy == name && r.counts()) {
+        for r in results
+            .grasps
+            .iter()
+            .filter(|r| &r.policy == name && r.counts())
+        {
             let Some(q) = r.quality else { continue };
             let bin = QUALITY_BINS
                 .iter()
