@@ -172,9 +172,9 @@ pub fn markdown(results: &Results) -> String {
          (the trial tests the pose, not the grasp). Intervals: Wilson, 95%.\n"
     );
     let mut header = String::from(
-        "| policy | command | plans on | held (of plans) | 95% interval | grasps returned | precision (held of returned) | toppled |",
+        "| policy | command | plans on | objects | held (of plans) | 95% interval | grasps returned | precision (held of returned) | toppled |",
     );
-    let mut rule = String::from("|---|---|---|---|---|---|---|---|");
+    let mut rule = String::from("|---|---|---|---|---|---|---|---|---|");
     let coverage = config.coverage;
     if coverage {
         header.push_str(
@@ -183,34 +183,54 @@ pub fn markdown(results: &Results) -> String {
         rule.push_str("---|---|");
     }
     let _ = writeln!(md, "{header}\n{rule}");
-    for (name, command, about) in &results.policies {
-        let mut all = Tally::default();
-        let mut holdable = Tally::default();
-        for r in results.grasps.iter().filter(|r| &r.policy == name) {
-            all.add(r);
-            let key = (set_of(results, r), r.object.as_str(), r.pose);
-            if placed.get(&key).is_some_and(|p| p.holdable == Some(true)) {
-                holdable.add(r);
-            }
+    // Each set apart, then all of them together when there are several.
+    let mut sets: Vec<&str> = Vec::new();
+    for p in &results.objects {
+        if !sets.contains(&p.set.as_str()) {
+            sets.push(&p.set);
         }
-        let _ = write!(
-            md,
-            "| {name} | `{command}` | {about} | {} | {} | {} | {} | {} |",
-            all.held_cell(),
-            all.interval(),
-            pct(all.returned, all.trials),
-            pct(all.held, all.returned),
-            all.toppled
-        );
-        if coverage {
+    }
+    let mut scopes: Vec<Option<&str>> = sets.iter().copied().map(Some).collect();
+    if sets.len() > 1 {
+        scopes.push(None);
+    }
+    for (name, command, about) in &results.policies {
+        for scope in &scopes {
+            let mut all = Tally::default();
+            let mut holdable = Tally::default();
+            for r in results.grasps.iter().filter(|r| &r.policy == name) {
+                let set = set_of(results, r);
+                if scope.is_some_and(|s| s != set) {
+                    continue;
+                }
+                all.add(r);
+                if placed
+                    .get(&(set, r.object.as_str(), r.pose))
+                    .is_some_and(|p| p.holdable == Some(true))
+                {
+                    holdable.add(r);
+                }
+            }
             let _ = write!(
                 md,
-                " {} | {} |",
-                holdable.held_cell(),
-                pct(holdable.returned, holdable.trials)
+                "| {name} | `{command}` | {about} | {} | {} | {} | {} | {} | {} |",
+                scope.unwrap_or("all"),
+                all.held_cell(),
+                all.interval(),
+                pct(all.returned, all.trials),
+                pct(all.held, all.returned),
+                all.toppled
             );
+            if coverage {
+                let _ = write!(
+                    md,
+                    " {} | {} |",
+                    holdable.held_cell(),
+                    pct(holdable.returned, holdable.trials)
+                );
+            }
+            md.push('\n');
         }
-        md.push('\n');
     }
     if coverage {
         let holdable = results
