@@ -281,8 +281,8 @@ pub fn markdown(results: &Results) -> String {
     let _ = writeln!(md, "\n### Per pose kind (held of plans)\n");
     let _ = writeln!(
         md,
-        "Upright: taller than its footprint is long; lying: lower; flat and wide: lower than \
-         wide and wider than the hand opens across its narrow side; open at the top: a ray \
+        "Upright: taller than its footprint is long; lying: lower; flat and wide: under 0.6 \
+         of its footprint's narrow side, which is wider than the hand opens; open at the top: a ray \
          down the footprint's centre falls below a third of the height; thin: under 1.5 cm.\n"
     );
     let _ = writeln!(md, "{}", columns(&["pose kind"]));
