@@ -25,6 +25,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use clap::Parser;
+use mvgrasp::evaluate::depth::DepthErrors;
 use mvgrasp::geometry::objects::{Category, generate};
 use mvgrasp::geometry::{HemisphereLayout, Intrinsics, IntrinsicsPreset, RestingPoses};
 use mvgrasp::infer::Parallelism;
@@ -58,81 +59,19 @@ struct Args {
     sweep_hull: bool,
 }
 
-/// Sums over object pixels.
-#[derive(Clone, Copy)]
-struct Errors {
-    object_pixels: usize,
-    predicted: usize,
-    abs_error_m: f64,
-    true_depth_m: f64,
-    within_2mm: usize,
-    within_5mm: usize,
-    /// Predicted pixels by error, 0.1 mm bins (the last: 200 mm and more), for the median.
-    histogram: [u32; HISTOGRAM_BINS],
-}
-
-const HISTOGRAM_BINS: usize = 2001;
-
-impl Default for Errors {
-    fn default() -> Self {
-        Self {
-            object_pixels: 0,
-            predicted: 0,
-            abs_error_m: 0.0,
-            true_depth_m: 0.0,
-            within_2mm: 0,
-            within_5mm: 0,
-            histogram: [0; HISTOGRAM_BINS],
-        }
-    }
-}
-
-impl Errors {
-    fn add(&mut self, predicted: &[f32], truth: &[f32], mask: &[bool]) {
-        for ((&p, &t), &m) in predicted.iter().zip(truth).zip(mask) {
-            if !m || t <= 0.0 {
-                continue;
-            }
-            self.object_pixels += 1;
-            self.true_depth_m += f64::from(t);
-            if p > 0.0 {
-                let e = f64::from((p - t).abs());
-                self.predicted += 1;
-                self.abs_error_m += e;
-                self.within_2mm += usize::from(e <= 2e-3);
-                self.within_5mm += usize::from(e <= 5e-3);
-                self.histogram[((e * 1e4) as usize).min(HISTOGRAM_BINS - 1)] += 1;
-            }
-        }
-    }
-
-    /// The median error of the predicted pixels, millimetres (to 0.1 mm).
-    fn median_mm(&self) -> f64 {
-        let half = self.predicted.div_ceil(2) as u64;
-        let mut seen = 0u64;
-        for (bin, &count) in self.histogram.iter().enumerate() {
-            seen += u64::from(count);
-            if seen >= half && count > 0 {
-                return (bin as f64 + 0.5) * 0.1;
-            }
-        }
-        f64::NAN
-    }
-
-    fn row(&self) -> String {
-        let n = self.object_pixels.max(1) as f64;
-        let mae = self.abs_error_m / self.predicted.max(1) as f64;
-        let mean_depth = self.true_depth_m / n;
-        format!(
-            "{:.1} | {:.2} | {:.0}% | {:.0}% | {:.0}% | {:.4}",
-            self.median_mm(),
-            1e3 * mae,
-            100.0 * self.predicted as f64 / n,
-            100.0 * self.within_2mm as f64 / n,
-            100.0 * self.within_5mm as f64 / n,
-            mae / mean_depth
-        )
-    }
+/// `errors` as the table's cells: median, MAE, predicted, within 2 mm, within 5 mm,
+/// normalised.
+fn row(errors: &DepthErrors) -> String {
+    let n = errors.object_pixels.max(1) as f64;
+    format!(
+        "{:.1} | {:.2} | {:.0}% | {:.0}% | {:.0}% | {:.4}",
+        errors.median_mm(),
+        errors.mean_mm(),
+        100.0 * errors.predicted_share(),
+        100.0 * errors.within_2mm as f64 / n,
+        100.0 * errors.within_5mm_share(),
+        errors.normalised()
+    )
 }
 
 fn main() -> ExitCode {
@@ -175,7 +114,7 @@ fn run(args: &Args) -> Result<(), String> {
         ..HemisphereLayout::paper_test()
     };
     // [n][method][top-down, all views]; method 0 LSM, 1 sweep, 2 hull, 3 MVS.
-    let mut tallies = vec![[[Errors::default(); 2]; 4]; counts.len()];
+    let mut tallies: Vec<[[DepthErrors; 2]; 4]> = vec![Default::default(); counts.len()];
     // [n][LSM, baseline, hull (the baseline's), MVS]
     let mut seconds = vec![[0.0f64; 4]; counts.len()];
     // [n][confidence decile]: the MVS network's object pixels (all views) and those within 5 mm.
@@ -279,7 +218,7 @@ fn run(args: &Args) -> Result<(), String> {
             for (s, scored) in ["top-down", "all"].iter().enumerate() {
                 println!(
                     "| {method} | {n} | {scored} | {} | {:.2} |",
-                    tallies[c][m][s].row(),
+                    row(&tallies[c][m][s]),
                     seconds[c][m] / objects as f64
                 );
             }

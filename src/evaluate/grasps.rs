@@ -396,14 +396,6 @@ pub fn any_grasp_holds(
     Ok(labels.iter().any(|l| l.physics.is_some_and(|p| p.success)))
 }
 
-/// The offered poses of `object` and their probabilities.
-///
-/// # Errors
-/// A mesh with no stable pose.
-pub fn resting_poses(object: &GraspObject) -> Result<RestingPoses> {
-    RestingPoses::of(object.mesh()).map_err(Error::from)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -429,7 +421,7 @@ mod tests {
         let kinds = |category| {
             let mesh = generate(category, 0, 0).unwrap().mesh;
             let object = GraspObject::new(mesh).unwrap();
-            let rest = resting_poses(&object).unwrap();
+            let rest = RestingPoses::of(object.mesh()).unwrap();
             rest.iter()
                 .map(|(_, pose)| PoseKind::of(&object, &pose.table_from_object, 0.085))
                 .collect::<Vec<_>>()

@@ -17,6 +17,7 @@ pub mod report;
 
 use std::path::{Path, PathBuf};
 
+use mvgrasp_geometry::RestingPoses;
 use mvgrasp_grasp::GraspObject;
 use mvgrasp_render::Renderer;
 use serde::{Deserialize, Serialize};
@@ -167,10 +168,16 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
         objects.extend(found);
     }
     let renderer = Renderer::new(mvgrasp_render::Backend::Auto)?;
-    let ready: Vec<ReadyPolicy> = policies
-        .into_iter()
-        .map(ReadyPolicy::new)
-        .collect::<Result<_>>()?;
+    let run_grasps = config.suites.iter().any(|s| s == "grasps");
+    // The policies' networks, loaded only for the grasp suite.
+    let ready: Vec<ReadyPolicy> = if run_grasps {
+        policies
+            .into_iter()
+            .map(ReadyPolicy::new)
+            .collect::<Result<_>>()?
+    } else {
+        Vec::new()
+    };
     let mut journal = Journal::open(&out.join("records.jsonl"))?;
     let pictures = out.join("pictures");
     std::fs::create_dir_all(&pictures).map_err(Error::io("create", &pictures))?;
@@ -195,7 +202,6 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
         depth: Vec::new(),
         skipped: Vec::new(),
     };
-    let run_grasps = config.suites.iter().any(|s| s == "grasps");
     let depth_suite = if config.suites.iter().any(|s| s == "depth") {
         Some(depth::DepthSuite::new(config.depth_distance_m)?)
     } else {
@@ -288,15 +294,17 @@ fn evaluate_object(
 ) -> Result<(Vec<PlacedObject>, Vec<GraspRecord>)> {
     // Loaded only when some piece of work is missing.
     let mut loaded: Option<GraspObject> = None;
+    // Its resting poses, found once when some piece of work needs them.
+    let mut rest: Option<RestingPoses> = None;
     let poses_key = format!("poses|{id}");
     let placed: Vec<PlacedObject> = match journal.get(&poses_key)? {
         Some(placed) => placed,
         None => {
             let grasp_object = load(object, &mut loaded)?;
-            let rest = grasps::resting_poses(grasp_object)?;
+            let rest = rest.insert(RestingPoses::of(grasp_object.mesh())?);
             let gripper = ready[0].gripper()?;
             let mut placed = Vec::new();
-            for k in grasps::poses_to_try(&rest, config.all_poses) {
+            for k in grasps::poses_to_try(rest, config.all_poses) {
                 let (_, pose) = rest.get(k)?;
                 let holdable = if config.coverage {
                     Some(grasps::any_grasp_holds(
@@ -349,7 +357,10 @@ fn evaluate_object(
         let picture = pictures.join(report::picture_name(p));
         if !picture.is_file() {
             let grasp_object = load(object, &mut loaded)?;
-            let rest = grasps::resting_poses(grasp_object)?;
+            let rest = match rest {
+                Some(ref rest) => rest,
+                None => rest.insert(RestingPoses::of(grasp_object.mesh())?),
+            };
             let (_, pose) = rest.get(p.pose)?;
             // Each policy's hand in its colour (the report's legend).
             let hands: Vec<_> = first_seed

@@ -124,11 +124,13 @@ pub fn write(results: &Results, out: &Path) -> Result<()> {
 pub fn markdown(results: &Results) -> String {
     let mut md = String::new();
     let config = &results.config;
-    let placed: BTreeMap<(&str, &str, usize), &PlacedObject> = results
+    // Each record's object and pose (object names are unique over the sets).
+    let placed: BTreeMap<(&str, usize), &PlacedObject> = results
         .objects
         .iter()
-        .map(|p| ((p.set.as_str(), p.object.as_str(), p.pose), p))
+        .map(|p| ((p.object.as_str(), p.pose), p))
         .collect();
+    let place = |r: &GraspRecord| placed.get(&(r.object.as_str(), r.pose)).copied();
     let policies: Vec<&str> = results.policies.iter().map(|(n, ..)| n.as_str()).collect();
     let _ = writeln!(md, "# mvgrasp evaluation\n");
     let _ = writeln!(
@@ -199,15 +201,12 @@ pub fn markdown(results: &Results) -> String {
             let mut all = Tally::default();
             let mut holdable = Tally::default();
             for r in results.grasps.iter().filter(|r| &r.policy == name) {
-                let set = set_of(results, r);
-                if scope.is_some_and(|s| s != set) {
+                let Some(p) = place(r) else { continue };
+                if scope.is_some_and(|s| s != p.set) {
                     continue;
                 }
                 all.add(r);
-                if placed
-                    .get(&(set, r.object.as_str(), r.pose))
-                    .is_some_and(|p| p.holdable == Some(true))
-                {
+                if p.holdable == Some(true) {
                     holdable.add(r);
                 }
             }
@@ -253,9 +252,7 @@ pub fn markdown(results: &Results) -> String {
     let by = |key: &dyn Fn(&PlacedObject) -> String| {
         let mut table: BTreeMap<String, Vec<Tally>> = BTreeMap::new();
         for r in &results.grasps {
-            let Some(p) = placed.get(&(set_of(results, r), r.object.as_str(), r.pose)) else {
-                continue;
-            };
+            let Some(p) = place(r) else { continue };
             let Some(column) = policies.iter().position(|n| *n == r.policy) else {
                 continue;
             };
@@ -330,12 +327,7 @@ pub fn markdown(results: &Results) -> String {
                 results
                     .grasps
                     .iter()
-                    .filter(|r| {
-                        r.policy == *policy
-                            && r.object == p.object
-                            && r.pose == p.pose
-                            && set_of(results, r) == p.set
-                    })
+                    .filter(|r| r.policy == *policy && r.object == p.object && r.pose == p.pose)
                     .map(|r| r.outcome.as_str())
                     .collect::<Vec<_>>()
                     .join(", ")
@@ -499,16 +491,6 @@ fn depth_tables(md: &mut String, results: &Results) {
         }
         md.push('\n');
     }
-}
-
-/// The set of the object `r` was planned on (records are unique per set and name; the
-/// record itself carries only the name).
-fn set_of<'a>(results: &'a Results, r: &GraspRecord) -> &'a str {
-    results
-        .objects
-        .iter()
-        .find(|p| p.object == r.object && p.pose == r.pose)
-        .map_or("", |p| p.set.as_str())
 }
 
 /// `markdown` (the subset [`markdown`] writes: headings, paragraphs, lists, tables, images,
