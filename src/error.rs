@@ -50,7 +50,7 @@ pub enum Error {
     },
     /// A config that is not valid TOML of the expected shape (a syntax error, an unknown key,
     /// a wrong type).
-    #[error("not a valid config: {source}")]
+    #[error("not a valid config: {}", mvgrasp_geometry::one_line(&source.to_string()))]
     Toml {
         /// The parser's error.
         source: toml::de::Error,
@@ -138,13 +138,12 @@ pub enum Error {
         num_shards: usize,
     },
     /// A folder that holds a dataset made with another config or other objects.
-    #[error(
-        "{path}: this folder holds a dataset made with another config or other objects; use \
-         another folder or delete it"
-    )]
+    #[error("{path}: this folder holds a dataset made {reason}; use another folder or delete it")]
     ForeignDataset {
-        /// The dataset's manifest.
+        /// The dataset's manifest (or settings file).
         path: PathBuf,
+        /// How it differs: "with another config", "by another version of mvgrasp (...)".
+        reason: String,
     },
     /// A finished shard made with another config or other objects.
     #[error(

@@ -6,6 +6,7 @@ use std::fs::File;
 use std::io::BufReader;
 use std::path::Path;
 
+use mvgrasp_geometry::one_line;
 use mvgrasp_planner::{Mask, PlannerError};
 
 /// `Result` with the planner's error (a sensor file's errors are [`PlannerError::File`]).
@@ -82,9 +83,41 @@ pub fn read_depth_in_units(path: impl AsRef<Path>, png_units_per_m: f32) -> Resu
     Ok(depth)
 }
 
+/// Refuses a `.npy` whose preamble declares a header longer than the file (`npyz` would
+/// allocate the declared length, up to 4 GiB, before reading it).
+fn check_npy_header_length(file: &mut File) -> std::result::Result<(), String> {
+    use std::io::{Read, Seek};
+    let size = file.metadata().map_err(|e| e.to_string())?.len();
+    let mut preamble = [0u8; 12];
+    let read = file.read(&mut preamble).map_err(|e| e.to_string())?;
+    file.rewind().map_err(|e| e.to_string())?;
+    if read < 10 || &preamble[..6] != b"\x93NUMPY" {
+        return Ok(()); // npyz names what is wrong with it
+    }
+    let (start, length) = if preamble[6] == 1 {
+        (
+            10,
+            u64::from(u16::from_le_bytes([preamble[8], preamble[9]])),
+        )
+    } else if read == 12 {
+        let bytes = [preamble[8], preamble[9], preamble[10], preamble[11]];
+        (12, u64::from(u32::from_le_bytes(bytes)))
+    } else {
+        return Err(format!("a .npy of {size} bytes, shorter than its preamble"));
+    };
+    if start + length > size {
+        return Err(format!(
+            "not a .npy: its header declares {length} bytes, the file has {size} bytes in all"
+        ));
+    }
+    Ok(())
+}
+
 fn read_npy(path: &Path) -> std::result::Result<SensorDepth, String> {
-    let file = File::open(path).map_err(|e| e.to_string())?;
-    let npy = npyz::NpyFile::new(BufReader::new(file)).map_err(|e| format!("not a .npy: {e}"))?;
+    let mut file = File::open(path).map_err(|e| e.to_string())?;
+    check_npy_header_length(&mut file)?;
+    let npy = npyz::NpyFile::new(BufReader::new(file))
+        .map_err(|e| format!("not a .npy: {}", one_line(&e.to_string())))?;
     let shape = npy.shape().to_vec();
     let (height, width) = match shape[..] {
         [h, w] | [h, w, 1] => (h, w),

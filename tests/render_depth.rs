@@ -172,9 +172,10 @@ fn the_dataset_is_deterministic_and_resumes_after_an_interruption() {
     let resumed = write_dataset(&renderer, &sources, &config, &b, false).unwrap();
     assert_eq!((resumed.written, resumed.skipped), (1, 1));
     let (fa, fb) = (files(&a), files(&b));
-    // Per object: object.json, mesh.obj, two cameras.json, 30 views x 3 images; plus dataset.json.
+    // Per object: object.json, mesh.obj, two cameras.json, 30 views x 3 images; plus
+    // dataset.json and settings.json.
     let per_object = 2 + 2 + 30 * 3;
-    assert_eq!(fa.len(), 2 * per_object + 1, "file count");
+    assert_eq!(fa.len(), 2 * per_object + 2, "file count");
     assert_eq!(
         fa.iter().map(|f| &f.0).collect::<Vec<_>>(),
         fb.iter().map(|f| &f.0).collect::<Vec<_>>()
@@ -182,6 +183,17 @@ fn the_dataset_is_deterministic_and_resumes_after_an_interruption() {
     for ((name, x), (_, y)) in fa.iter().zip(&fb) {
         assert!(x == y, "{} differs between the runs", name.display());
     }
+    // A run with other settings into the folder is refused (it would mix two datasets),
+    // naming the file that records the folder's settings.
+    let other = DatasetConfig {
+        seed: 2,
+        ..Default::default()
+    };
+    let refused = write_dataset(&renderer, &sources, &other, &b, false).unwrap_err();
+    assert!(refused.to_string().contains("settings.json"), "{refused}");
+    // So is a folder whose objects were made before settings were recorded.
+    std::fs::remove_file(b.join("settings.json")).unwrap();
+    assert!(write_dataset(&renderer, &sources, &config, &b, false).is_err());
     // The test split's first camera is exactly top-down; cameras read back.
     let cameras = mvgrasp::dataset::read_cameras(&a.join("can_000/test/cameras.json")).unwrap();
     assert_eq!(cameras.len(), 10);

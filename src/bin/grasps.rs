@@ -61,7 +61,13 @@ fn load_config(args: &Args) -> Result<AnalysisConfig, String> {
         Some(path) => {
             let text = std::fs::read_to_string(path)
                 .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
-            toml::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?
+            toml::from_str(&text).map_err(|e| {
+                format!(
+                    "{}: {}",
+                    path.display(),
+                    mvgrasp::geometry::one_line(&e.to_string())
+                )
+            })?
         }
         None => AnalysisConfig {
             physics: Some(PhysicsParams::default()),

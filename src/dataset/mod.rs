@@ -155,6 +155,7 @@ pub fn write_dataset(
         return Err(Error::DuplicateObject { name: w[0].clone() });
     }
     std::fs::create_dir_all(out).map_err(Error::io("create", out))?;
+    claim_folder(out, config)?;
     let bar = if progress {
         ProgressBar::new(sources.len() as u64)
     } else {
@@ -189,6 +190,57 @@ pub fn write_dataset(
     };
     write_json_atomically(&out.join("dataset.json"), &record)?;
     Ok(summary)
+}
+
+/// The version of the RGB-D dataset's files, recorded in `settings.json`: a folder that code
+/// writing other bytes started is refused instead of being finished with different bytes.
+pub const RGBD_FORMAT: &str = "mvgrasp-rgbd-dataset/1";
+
+/// Records this run's settings in `out/settings.json` when the folder is new, or checks them
+/// against the ones recorded there: a resumed run must be the run that started the folder.
+///
+/// # Errors
+/// [`Error::ForeignDataset`] naming `settings.json` when it records other settings or another
+/// format, or when the folder holds finished objects but no `settings.json` (an earlier
+/// version of mvgrasp made them); [`Error::Io`] or [`Error::Json`] naming the file.
+fn claim_folder(out: &Path, config: &DatasetConfig) -> Result<()> {
+    let path = out.join("settings.json");
+    let settings = serde_json::json!({
+        "format": RGBD_FORMAT,
+        "config": format!("{config:?}"),
+    });
+    match std::fs::read_to_string(&path) {
+        Ok(text) => {
+            let found: serde_json::Value =
+                serde_json::from_str(&text).map_err(Error::json("read", "JSON", &path))?;
+            let reason = if found.get("format") != settings.get("format") {
+                format!(
+                    "by another version of mvgrasp (format {}; this one writes {RGBD_FORMAT:?})",
+                    found.get("format").unwrap_or(&serde_json::Value::Null)
+                )
+            } else if found.get("config") != settings.get("config") {
+                "with another config".to_string()
+            } else {
+                return Ok(());
+            };
+            Err(Error::ForeignDataset { path, reason })
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            let entries = std::fs::read_dir(out).map_err(Error::io("read", out))?;
+            let started_before = entries
+                .filter_map(std::result::Result::ok)
+                .any(|entry| entry.path().join("object.json").is_file());
+            if started_before {
+                return Err(Error::ForeignDataset {
+                    path,
+                    reason: "by an earlier version of mvgrasp (its objects have no settings.json)"
+                        .to_string(),
+                });
+            }
+            write_json_atomically(&path, &settings)
+        }
+        Err(e) => Err(Error::io("read", &path)(e)),
+    }
 }
 
 /// Renders one object into `.NAME.partial/` and renames it to `NAME/`; returns the views.

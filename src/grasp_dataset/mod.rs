@@ -134,11 +134,14 @@ impl DatasetPlan {
             })
             .collect();
         let listed: Vec<&ManifestObject> = objects.iter().map(|(o, _)| o).collect();
-        let text = serde_json::to_string(&(config, listed)).map_err(|e| Error::ConfigValue {
-            key: "config",
-            value: e.to_string(),
-            expected: "a config that serialises to JSON",
-        })?;
+        // The format names the code's version of the bytes: shards written by code that
+        // writes other bytes are refused too.
+        let text =
+            serde_json::to_string(&(FORMAT, config, listed)).map_err(|e| Error::ConfigValue {
+                key: "config",
+                value: e.to_string(),
+                expected: "a config that serialises to JSON",
+            })?;
         Ok(Self {
             objects,
             resolved: Resolved {
@@ -150,8 +153,8 @@ impl DatasetPlan {
         })
     }
 
-    /// A hash of the config and the object list (FNV-1a of their JSON, hex): every shard
-    /// records it, and a shard made with another is refused.
+    /// A hash of the format ([`FORMAT`]), the config and the object list (FNV-1a of their
+    /// JSON, hex): every shard records it, and a shard made with another is refused.
     pub fn hash(&self) -> &str {
         &self.hash
     }
@@ -236,10 +239,19 @@ impl DatasetPlan {
             &path,
         ))?;
         let fresh = self.manifest(Vec::new());
-        if existing.config != fresh.config || existing.objects != fresh.objects {
-            return Err(Error::ForeignDataset { path });
-        }
-        Ok(())
+        let reason = if existing.format != fresh.format {
+            format!(
+                "by another version of mvgrasp (format {:?}; this one writes {:?})",
+                existing.format, fresh.format
+            )
+        } else if existing.config != fresh.config {
+            "with another config".to_string()
+        } else if existing.objects != fresh.objects {
+            "from other objects".to_string()
+        } else {
+            return Ok(());
+        };
+        Err(Error::ForeignDataset { path, reason })
     }
 }
 

@@ -10,6 +10,34 @@ pub(crate) fn in_memory() -> PathBuf {
     PathBuf::from("<in-memory>")
 }
 
+/// A parser's message on one line: the source excerpt that TOML and pest draw under a message
+/// (`12 | text`, `^---` markers) is dropped, and the remaining lines are joined with ": ".
+/// Errors are printed one per line (a log line, a CLI's stderr), so every parser's message
+/// goes through this before it is wrapped.
+///
+/// ```
+/// use mvgrasp_geometry::one_line;
+/// let toml = "TOML parse error at line 1, column 2\n  |\n1 | p\n  |  ^\nkey with no value\n";
+/// assert_eq!(one_line(toml), "TOML parse error at line 1, column 2: key with no value");
+/// ```
+pub fn one_line(message: &str) -> String {
+    let kept: Vec<&str> = message
+        .lines()
+        .map(str::trim)
+        .filter(|line| {
+            let excerpt = line
+                .split_once('|')
+                .is_some_and(|(gutter, _)| gutter.trim().chars().all(|c| c.is_ascii_digit()));
+            let marker = line
+                .chars()
+                .all(|c| matches!(c, '^' | '-' | '~' | ' ' | '>'));
+            !line.is_empty() && !excerpt && !marker
+        })
+        .map(|line| line.trim_start_matches("= "))
+        .collect();
+    kept.join(": ")
+}
+
 /// Everything that can go wrong in `mvgrasp-geometry`.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]

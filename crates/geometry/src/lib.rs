@@ -13,7 +13,7 @@ pub mod views;
 pub mod pose_as_matrix;
 
 pub use camera::{Camera, Intrinsics, IntrinsicsPreset, pose_from_rows, read_camera_pose, read_tf};
-pub use error::{GeometryError, Result};
+pub use error::{GeometryError, Result, one_line};
 pub use mesh::{
     LoadOptions, TriangleMesh, UrdfGeometryKind, UrdfModel, load_mesh, load_mesh_with, write_obj,
 };

@@ -217,7 +217,7 @@ impl Gripper {
         // One parse into a JSON value, whatever the format; its keys say what kind of file it is.
         let value: serde_json::Value = match extension {
             "toml" => toml::from_str::<toml::Table>(&text)
-                .map_err(|e| e.to_string())
+                .map_err(|e| mvgrasp_geometry::one_line(&e.to_string()))
                 .and_then(|table| serde_json::to_value(table).map_err(|e| e.to_string())),
             "json" => serde_json::from_str(&text).map_err(|e| e.to_string()),
             other => Err(format!(

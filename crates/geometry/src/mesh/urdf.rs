@@ -47,14 +47,14 @@ impl UrdfModel {
             },
             _ => GeometryError::Parse {
                 format: "URDF",
-                detail: e.to_string(),
+                detail: crate::one_line(&e.to_string()),
                 path: path.to_path_buf(),
             },
         })?;
         let robot = urdf_rs::read_from_string(&with_limit_velocities(&text)).map_err(|e| {
             GeometryError::Parse {
                 format: "URDF",
-                detail: e.to_string(),
+                detail: crate::one_line(&e.to_string()),
                 path: path.to_path_buf(),
             }
         })?;
