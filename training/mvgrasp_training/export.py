@@ -13,7 +13,7 @@ from typing import Any
 import torch
 from safetensors.torch import load_file, save_file
 
-from mvgrasp_training._files import read_format_json
+from mvgrasp_training._files import read_format_json, write_text_atomically
 from mvgrasp_training.gqcnn import GQCNN
 from mvgrasp_training.lsm import LSM, LsmArchitecture
 from mvgrasp_training.mvs import MVS, MvsArchitecture
@@ -26,7 +26,9 @@ def _save_weights(net: torch.nn.Module, stem: Path) -> tuple[dict[str, torch.Ten
     stem.parent.mkdir(parents=True, exist_ok=True)
     tensors = {k: v.detach().to(torch.float32).contiguous() for k, v in net.state_dict().items()}
     weights = stem.with_suffix(".safetensors")
-    save_file(tensors, str(weights))
+    partial = weights.with_suffix(".safetensors.partial")
+    save_file(tensors, str(partial))
+    partial.replace(weights)
     return tensors, weights
 
 
@@ -59,7 +61,7 @@ def export_gqcnn(
     if input_contract is not None:
         description["input"] = input_contract
     path = stem.with_suffix(".json")
-    path.write_text(json.dumps(description, indent=2) + "\n")
+    write_text_atomically(path, json.dumps(description, indent=2) + "\n")
     return path
 
 
@@ -114,7 +116,7 @@ def _export_depth_network(
         "training": training or {},
     }
     path = stem.with_suffix(".json")
-    path.write_text(json.dumps(description, indent=2) + "\n")
+    write_text_atomically(path, json.dumps(description, indent=2) + "\n")
     return path
 
 

@@ -36,7 +36,9 @@ def plot_history(history: list[dict[str, Any]], path: str | Path, title: str = "
         fig.suptitle(title)
     fig.tight_layout()
     path = Path(path)
-    fig.savefig(path)
+    partial = Path(path).with_suffix(".partial.png")
+    fig.savefig(partial)
+    partial.replace(path)
     plt.close(fig)
     return path
 
@@ -69,6 +71,8 @@ def plot_lsm_history(history: list[dict[str, Any]], path: str | Path, title: str
         ax.set_title(title)
     fig.tight_layout()
     path = Path(path)
-    fig.savefig(path)
+    partial = Path(path).with_suffix(".partial.png")
+    fig.savefig(partial)
+    partial.replace(path)
     plt.close(fig)
     return path

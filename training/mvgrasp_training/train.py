@@ -39,6 +39,7 @@ import torch.distributed as dist
 from torch import nn
 from torch.nn import functional as F
 
+from mvgrasp_training._files import check_resumable, checkpoint_identity, write_text_atomically
 from mvgrasp_training.config import ExperimentConfig, load_config
 from mvgrasp_training.export import export_gqcnn
 from mvgrasp_training.gqcnn import ARCHITECTURES, GQCNN
@@ -259,6 +260,7 @@ def _train(
     best: dict[str, Any] = {"epoch": 0, "net": None}
     if checkpoint.exists():
         state = torch.load(checkpoint, weights_only=False)
+        check_resumable(state, config, checkpoint)
         net.load_state_dict(state["net"])
         optimiser.load_state_dict(state["optimiser"])
         history, start_epoch, best = state["history"], state["epoch"], state["best"]
@@ -318,7 +320,8 @@ def _train(
             if best["net"] is None or val["balanced_accuracy"] > _best_accuracy(history, best):
                 best = {"epoch": epoch + 1, "net": copy.deepcopy(net.state_dict())}
             state = {"net": net.state_dict(), "optimiser": optimiser.state_dict(),
-                     "history": history, "epoch": epoch + 1, "best": best}
+                     "history": history, "epoch": epoch + 1, "best": best,
+                     "identity": checkpoint_identity(config)}
             partial = checkpoint.with_suffix(".pt.partial")
             torch.save(state, partial)
             partial.replace(checkpoint)
@@ -349,7 +352,7 @@ def _train(
         test = load_arrays(test_dir, pose_inputs, config.data.label)
         report["test"] = metrics(predict(net, test), test.label)
         report["test_dataset"] = dataset_record(test_dir)
-    (out / "history.json").write_text(json.dumps(history, indent=2) + "\n")
+    write_text_atomically(out / "history.json", json.dumps(history, indent=2) + "\n")
     plot_history(history, out / "learning_curve.png", title=config.name)
     export_gqcnn(
         net,

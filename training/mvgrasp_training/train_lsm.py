@@ -36,6 +36,7 @@ from torch import distributed as dist
 from torch import nn
 from torch.nn import functional as F
 
+from mvgrasp_training._files import check_resumable, checkpoint_identity, write_text_atomically
 from mvgrasp_training.config import LsmExperimentConfig, load_config
 from mvgrasp_training.export import export_lsm
 from mvgrasp_training.lsm import LSM, LsmArchitecture, grid_centre, ray_depths, scale_intrinsics
@@ -216,6 +217,7 @@ def _train(config: LsmExperimentConfig, out: Path, log, rank: int, world: int) -
     checkpoint = out / "checkpoint.pt"
     if checkpoint.is_file():
         state = torch.load(checkpoint, weights_only=False)
+        check_resumable(state, config, checkpoint)
         net.load_state_dict(state["model"])
         optimiser.load_state_dict(state["optimiser"])
         history = state["history"]
@@ -272,10 +274,15 @@ def _train(config: LsmExperimentConfig, out: Path, log, rank: int, world: int) -
                 "history": history,
                 "epoch": epoch,
                 "best": best,
+                "identity": checkpoint_identity(config),
             },
             checkpoint,
         )
-        (out / "history.json").write_text(json.dumps(history, indent=2) + "\n")
+        write_text_atomically(out / "history.json", json.dumps(history, indent=2) + "\n")
+    if lead:
+        # Again after the loop: a run killed between the checkpoint and this file resumes
+        # with no epoch left, and must still leave the whole history.
+        write_text_atomically(out / "history.json", json.dumps(history, indent=2) + "\n")
     if world > 1:
         dist.barrier()
     return {"best_object_mm": best, "epochs": len(history)}

@@ -34,6 +34,7 @@ import numpy as np
 import torch
 from torch.nn import functional as F
 
+from mvgrasp_training._files import check_resumable, checkpoint_identity, write_text_atomically
 from mvgrasp_training.config import MvsExperimentConfig, load_config
 from mvgrasp_training.export import export_mvs
 from mvgrasp_training.lsm import grid_centre, scale_intrinsics
@@ -198,6 +199,7 @@ def train(config: MvsExperimentConfig, out: Path, log=print) -> dict[str, float]
     checkpoint = out / "checkpoint.pt"
     if checkpoint.is_file():
         state = torch.load(checkpoint, weights_only=False)
+        check_resumable(state, config, checkpoint)
         net.load_state_dict(state["model"])
         optimiser.load_state_dict(state["optimiser"])
         history = state["history"]
@@ -253,10 +255,14 @@ def train(config: MvsExperimentConfig, out: Path, log=print) -> dict[str, float]
                 "history": history,
                 "epoch": epoch,
                 "best": best,
+                "identity": checkpoint_identity(config),
             },
             checkpoint,
         )
-        (out / "history.json").write_text(json.dumps(history, indent=2) + "\n")
+        write_text_atomically(out / "history.json", json.dumps(history, indent=2) + "\n")
+    # Again after the loop: a run killed between the checkpoint and this file resumes with no
+    # epoch left, and must still leave the whole history.
+    write_text_atomically(out / "history.json", json.dumps(history, indent=2) + "\n")
     return {"best_object_mm": best, "epochs": len(history)}
 
 

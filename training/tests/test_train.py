@@ -94,6 +94,27 @@ def test_a_short_run_trains_resumes_and_exports(dataset: Path, tmp_path: Path) -
     report = train(longer, out)
     assert [h["epoch"] for h in report["history"]] == [1, 2]
     assert (out / "learning_curve.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # A run with another setting into the same folder is refused, naming the checkpoint and
+    # the setting, and leaves the run's files as they were.
+    other = parse_config(
+        {
+            "name": "test",
+            "seed": 0,
+            "data": {"dataset_dir": str(data), "val_fraction": 0.25},
+            "train": {"epochs": 3, "batch_size": 32, "learning_rate": 2e-3},
+        }
+    )
+    before = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
+    with pytest.raises(ValueError, match=r"checkpoint.*another config \(train\.learning_rate"):
+        train(other, out)
+    assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == before
+    # As is a checkpoint that another version of the training code wrote.
+    checkpoint = next(out.glob("*.pt"))
+    state = torch.load(checkpoint, weights_only=False)
+    state["identity"]["format"] = "mvgrasp-checkpoint/0"
+    torch.save(state, checkpoint)
+    with pytest.raises(ValueError, match="another version of the training code"):
+        train(longer, out)
 
 
 def _tensors(path: Path) -> dict[str, np.ndarray]:
