@@ -67,7 +67,7 @@ pub enum Error {
     },
     /// A JSON file (a manifest, a shard's record, a dataset's cameras) that cannot be read or
     /// written.
-    #[error("{path}: cannot {op} the {what}: {source}")]
+    #[error("{path}: cannot {op} the {what}: {}", mvgrasp_geometry::one_line(&source.to_string()))]
     Json {
         /// "read" or "write".
         op: &'static str,

@@ -188,12 +188,22 @@ fn decode_png(
     transformations: png::Transformations,
 ) -> std::result::Result<(png::OutputInfo, Vec<u8>), String> {
     let file = File::open(path).map_err(|e| e.to_string())?;
+    let file_bytes = file.metadata().map_err(|e| e.to_string())?.len();
     let mut decoder = png::Decoder::new(BufReader::new(file));
     decoder.set_transformations(transformations);
     let mut reader = decoder.read_info().map_err(|e| format!("not a PNG: {e}"))?;
+    let (width, height) = (reader.info().width, reader.info().height);
     let size = reader
         .output_buffer_size()
-        .ok_or_else(|| "the PNG is too large".to_string())?;
+        .ok_or_else(|| format!("{width} x {height} pixels: too large to hold"))?;
+    // Deflate expands a byte into at most 1032, so the header's size is checked against the
+    // file's before the image is allocated (a 300-byte file may declare a terabyte).
+    if u64::try_from(size).unwrap_or(u64::MAX) > file_bytes.saturating_mul(1032) + (1 << 20) {
+        return Err(format!(
+            "not a PNG: its header declares {width} x {height} pixels ({size} bytes), more \
+             than its {file_bytes} bytes can hold"
+        ));
+    }
     let mut bytes = vec![0; size];
     let info = reader
         .next_frame(&mut bytes)

@@ -37,7 +37,12 @@ impl Journal {
         for (number, line) in text[..complete].lines().enumerate() {
             let parsed: serde_json::Value =
                 serde_json::from_str(line).map_err(|e| Error::Evaluate {
-                    problem: format!("{}:{}: not a record: {e}", path.display(), number + 1),
+                    problem: format!(
+                        "{}:{}: not a record: {}",
+                        path.display(),
+                        number + 1,
+                        mvgrasp_geometry::one_line(&e.to_string())
+                    ),
                 })?;
             let (Some(key), Some(value)) = (parsed["key"].as_str(), parsed.get("value")) else {
                 return Err(Error::Evaluate {

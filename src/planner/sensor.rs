@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use mvgrasp_geometry::{Camera, Intrinsics, read_camera_pose};
+use mvgrasp_geometry::{Camera, Intrinsics, one_line, read_camera_pose};
 use mvgrasp_planner::{
     DepthImage, Fusion, FusionParams, GqcnnPolicy, Mask, Plan, Rejections, ScoredGrasp, TableFit,
     TableFitParams, View, fit_table, objects_above,
@@ -294,8 +294,12 @@ pub(crate) fn read_cameras_json(dir: &Path) -> Result<(std::path::PathBuf, Vec<C
     let path = dir.join("cameras.json");
     let text = std::fs::read_to_string(&path)
         .map_err(|e| mismatch(&path, format!("cannot read the cameras: {e}")))?;
-    let cameras: Vec<Camera> = serde_json::from_str(&text)
-        .map_err(|e| mismatch(&path, format!("not a list of cameras: {e}")))?;
+    let cameras: Vec<Camera> = serde_json::from_str(&text).map_err(|e| {
+        mismatch(
+            &path,
+            format!("not a list of cameras: {}", one_line(&e.to_string())),
+        )
+    })?;
     if cameras.is_empty() {
         return Err(mismatch(&path, "no camera".into()));
     }
@@ -312,7 +316,7 @@ pub(crate) fn render_conventions(dir: &Path) -> Result<(f32, Option<u8>)> {
     };
     let manifest: serde_json::Value = std::fs::read_to_string(&path)
         .map_err(|e| e.to_string())
-        .and_then(|t| serde_json::from_str(&t).map_err(|e| e.to_string()))
+        .and_then(|t| serde_json::from_str(&t).map_err(|e| one_line(&e.to_string())))
         .map_err(|e| mismatch(&path, format!("cannot read the dataset's units: {e}")))?;
     let units = manifest["depth_png_units_per_m"]
         .as_f64()

@@ -115,8 +115,20 @@ fn signature(outcome: &Outcome, work: &Path) -> String {
         Outcome::Refused(message) => {
             let message = message.replace(&work.display().to_string(), "");
             let mut blanked = String::with_capacity(message.len());
+            // What a message quotes from the input (`key`, "value") is the input, not a path.
+            let mut quoted: Option<char> = None;
             for c in message.chars() {
-                if c.is_ascii_digit() {
+                if let Some(close) = quoted {
+                    if c == close {
+                        quoted = None;
+                        blanked.push(c);
+                    }
+                    continue;
+                }
+                if matches!(c, '`' | '"') {
+                    quoted = Some(c);
+                    blanked.push(c);
+                } else if c.is_ascii_digit() {
                     if !blanked.ends_with('#') {
                         blanked.push('#');
                     }

@@ -60,6 +60,34 @@ pub fn mutate(
         mutate_once(input, others, dictionary, rng);
     }
     input.truncate(max_len);
+    // A PNG with a wrong chunk CRC stops at the first check; most of the time the mutant gets
+    // its CRCs back, so that a changed header (a 2^31-pixel width) reaches the decoder.
+    if input.starts_with(PNG_SIGNATURE) && rng.random_bool(0.9) {
+        fix_png_crcs(input);
+    }
+}
+
+const PNG_SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
+
+/// Rewrites the CRC of every whole chunk of a PNG (length, type, data, CRC after the
+/// signature); a chunk cut short by the end of the input is left as it is.
+pub fn fix_png_crcs(png: &mut [u8]) {
+    let mut at = PNG_SIGNATURE.len();
+    while at + 8 <= png.len() {
+        let length = u32::from_be_bytes([png[at], png[at + 1], png[at + 2], png[at + 3]]);
+        let Some(end) = usize::try_from(length)
+            .ok()
+            .and_then(|l| (at + 8).checked_add(l))
+        else {
+            return;
+        };
+        if end + 4 > png.len() {
+            return;
+        }
+        let crc = crc32fast::hash(&png[at + 4..end]);
+        png[end..end + 4].copy_from_slice(&crc.to_be_bytes());
+        at = end + 4;
+    }
 }
 
 fn mutate_once(input: &mut Vec<u8>, others: &[Vec<u8>], dictionary: &[&[u8]], rng: &mut impl Rng) {
@@ -155,6 +183,17 @@ fn replace_number(input: &mut Vec<u8>, from: usize, rng: &mut impl Rng) {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn png_crcs_are_rewritten_over_whole_chunks() {
+        // IEND's CRC is that of its type alone: AE 42 60 82.
+        let mut png = super::PNG_SIGNATURE.to_vec();
+        png.extend_from_slice(&[0, 0, 0, 0, b'I', b'E', b'N', b'D', 0, 0, 0, 0]);
+        png.extend_from_slice(&[0, 0, 0, 9, b'I']); // a chunk cut short: left alone
+        super::fix_png_crcs(&mut png);
+        assert_eq!(png[16..20], [0xAE, 0x42, 0x60, 0x82]);
+        assert_eq!(png[20..], [0, 0, 0, 9, b'I']);
+    }
+
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 

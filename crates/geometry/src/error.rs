@@ -10,30 +10,48 @@ pub(crate) fn in_memory() -> PathBuf {
     PathBuf::from("<in-memory>")
 }
 
-/// A parser's message on one line: the source excerpt that TOML and pest draw under a message
-/// (`12 | text`, `^---` markers) is dropped, and the remaining lines are joined with ": ".
-/// Errors are printed one per line (a log line, a CLI's stderr), so every parser's message
-/// goes through this before it is wrapped.
+/// A parser's message on one line. When the message draws a source excerpt under itself (TOML
+/// and pest do: `12 | text` and `^---` lines), the excerpt is dropped and the remaining lines
+/// are joined with ": "; otherwise line breaks and other control characters (a JSON key that
+/// quotes the file's bytes) are written as escapes (`\n`). Errors are printed one per line (a
+/// log line, a CLI's stderr), so every parser's message goes through this before it is
+/// wrapped.
 ///
 /// ```
 /// use mvgrasp_geometry::one_line;
 /// let toml = "TOML parse error at line 1, column 2\n  |\n1 | p\n  |  ^\nkey with no value\n";
 /// assert_eq!(one_line(toml), "TOML parse error at line 1, column 2: key with no value");
+/// let json = "unknown field `a\nb`, expected `K` at line 1 column 9";
+/// assert_eq!(one_line(json), "unknown field `a\\nb`, expected `K` at line 1 column 9");
 /// ```
 pub fn one_line(message: &str) -> String {
-    let kept: Vec<&str> = message
+    let excerpt = |line: &str| {
+        line.split_once('|')
+            .is_some_and(|(gutter, _)| gutter.trim().chars().all(|c| c.is_ascii_digit()))
+    };
+    if !message.lines().any(|line| excerpt(line.trim())) {
+        return message
+            .trim_end()
+            .chars()
+            .map(|c| {
+                if c.is_control() {
+                    c.escape_default().to_string()
+                } else {
+                    c.to_string()
+                }
+            })
+            .collect();
+    }
+    let kept: Vec<String> = message
         .lines()
         .map(str::trim)
         .filter(|line| {
-            let excerpt = line
-                .split_once('|')
-                .is_some_and(|(gutter, _)| gutter.trim().chars().all(|c| c.is_ascii_digit()));
             let marker = line
                 .chars()
                 .all(|c| matches!(c, '^' | '-' | '~' | ' ' | '>'));
-            !line.is_empty() && !excerpt && !marker
+            !line.is_empty() && !excerpt(line) && !marker
         })
-        .map(|line| line.trim_start_matches("= "))
+        .map(|line| one_line(line.trim_start_matches("= ")))
         .collect();
     kept.join(": ")
 }
@@ -135,7 +153,7 @@ pub enum GeometryError {
         path: PathBuf,
     },
     /// A URDF names a mesh file that is not there.
-    #[error("{path}: link {link:?} uses mesh {mesh} which does not exist")]
+    #[error("{path}: link {link:?} uses mesh {mesh:?}, which does not exist")]
     UrdfMeshMissing {
         /// The link.
         link: String,

@@ -219,7 +219,9 @@ impl Gripper {
             "toml" => toml::from_str::<toml::Table>(&text)
                 .map_err(|e| mvgrasp_geometry::one_line(&e.to_string()))
                 .and_then(|table| serde_json::to_value(table).map_err(|e| e.to_string())),
-            "json" => serde_json::from_str(&text).map_err(|e| e.to_string()),
+            "json" => {
+                serde_json::from_str(&text).map_err(|e| mvgrasp_geometry::one_line(&e.to_string()))
+            }
             other => Err(format!(
                 "unknown extension {other:?}: expected .toml, .json or .urdf"
             )),
@@ -231,7 +233,7 @@ impl Gripper {
         } else {
             serde_json::from_value::<Gripper>(value)
         }
-        .map_err(|e| fail(e.to_string()))?;
+        .map_err(|e| fail(mvgrasp_geometry::one_line(&e.to_string())))?;
         if !names_itself {
             gripper.name = path
                 .file_stem()

@@ -64,8 +64,12 @@ impl Ranker {
             path: path.to_path_buf(),
             detail,
         };
-        let file: RankerFile =
-            serde_json::from_str(text).map_err(|e| error(format!("not a ranker file: {e}")))?;
+        let file: RankerFile = serde_json::from_str(text).map_err(|e| {
+            error(format!(
+                "not a ranker file: {}",
+                mvgrasp_geometry::one_line(&e.to_string())
+            ))
+        })?;
         if file.format != RANKER_FORMAT {
             return Err(error(format!(
                 "format {:?}, expected {RANKER_FORMAT:?}",

@@ -174,7 +174,7 @@ pub fn read_camera_pose(path: impl AsRef<Path>) -> Result<Pose3> {
         path: path.to_path_buf(),
     };
     let m = serde_json::from_str::<PoseJson>(&text)
-        .map_err(|e| parse_error(e.to_string()))?
+        .map_err(|e| parse_error(crate::one_line(&e.to_string())))?
         .world_from_camera;
     pose_from_rows(m).map_err(parse_error)
 }

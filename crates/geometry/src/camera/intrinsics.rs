@@ -204,7 +204,8 @@ impl Intrinsics {
             detail,
             path: path.to_path_buf(),
         };
-        let intr: Intr = serde_json::from_str(&text).map_err(|e| parse_error(e.to_string()))?;
+        let intr: Intr = serde_json::from_str(&text)
+            .map_err(|e| parse_error(crate::one_line(&e.to_string())))?;
         let intrinsics = Self {
             fx: intr._fx,
             fy: intr._fy,
@@ -251,8 +252,8 @@ impl Intrinsics {
         if is_intr {
             return Self::from_intr_file(path);
         }
-        let plain: PlainJson =
-            serde_json::from_str(&text).map_err(|e| parse_error(e.to_string()))?;
+        let plain: PlainJson = serde_json::from_str(&text)
+            .map_err(|e| parse_error(crate::one_line(&e.to_string())))?;
         let k = plain.k;
         if k[0][1] != 0.0 || k[1][0] != 0.0 || k[2] != [0.0, 0.0, 1.0] {
             return Err(parse_error(format!(

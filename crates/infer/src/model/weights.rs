@@ -8,6 +8,21 @@ use safetensors::{Dtype, SafeTensors};
 use crate::error::{InferError, Result};
 use crate::tensor::Tensor;
 
+/// A JSON parser's message with its line breaks and control characters escaped (an unknown
+/// key quotes the file's bytes): errors are printed one per line.
+fn one_line(error: &serde_json::Error) -> String {
+    let text = error.to_string();
+    text.chars()
+        .map(|c| {
+            if c.is_control() {
+                c.escape_default().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
+}
+
 /// The tensors of one safetensors file, as f32.
 #[derive(Debug)]
 pub struct Weights {
@@ -160,7 +175,7 @@ pub(crate) fn parse_description<T: serde::de::DeserializeOwned>(
         path: json.to_path_buf(),
     };
     let description: T = serde_json::from_str(text)
-        .map_err(|e| model_error(format!("not {kind} description: {e}")))?;
+        .map_err(|e| model_error(format!("not {kind} description: {}", one_line(&e))))?;
     if format_of(&description) != format {
         return Err(model_error(format!(
             "format {:?}, expected {format:?}",
