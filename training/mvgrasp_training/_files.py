@@ -77,3 +77,32 @@ def write_text_atomically(path: Path, text: str) -> None:
     partial = path.with_suffix(path.suffix + ".partial")
     partial.write_text(text)
     partial.replace(path)
+
+
+def canonical(value: Any) -> Any:
+    """``value`` with every string interned, dicts, lists and tuples rebuilt: pickle writes a
+    string once and refers back to it when the same object comes again, so a checkpoint's
+    bytes would depend on which strings happen to be one object (a resumed run's history keys
+    come from the unpickler, a fresh run's from the code). Tensors are kept as they are."""
+    import sys
+
+    if isinstance(value, str):
+        return sys.intern(value)
+    if isinstance(value, dict):
+        return {canonical(k): canonical(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [canonical(v) for v in value]
+    if isinstance(value, tuple):
+        return tuple(canonical(v) for v in value)
+    return value
+
+
+def save_atomically(state: dict[str, Any], path: Path) -> None:
+    """``torch.save`` of ``canonical(state)`` to ``path.partial``, then renamed: a kill
+    mid-write leaves the old file, and the same state gives the same bytes whether the run was
+    resumed or not."""
+    import torch
+
+    partial = path.with_suffix(path.suffix + ".partial")
+    torch.save(canonical(state), partial)
+    partial.replace(path)

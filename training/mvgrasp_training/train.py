@@ -39,7 +39,12 @@ import torch.distributed as dist
 from torch import nn
 from torch.nn import functional as F
 
-from mvgrasp_training._files import check_resumable, checkpoint_identity, write_text_atomically
+from mvgrasp_training._files import (
+    check_resumable,
+    checkpoint_identity,
+    save_atomically,
+    write_text_atomically,
+)
 from mvgrasp_training.config import ExperimentConfig, load_config
 from mvgrasp_training.export import export_gqcnn
 from mvgrasp_training.gqcnn import ARCHITECTURES, GQCNN
@@ -322,9 +327,7 @@ def _train(
             state = {"net": net.state_dict(), "optimiser": optimiser.state_dict(),
                      "history": history, "epoch": epoch + 1, "best": best,
                      "identity": checkpoint_identity(config)}
-            partial = checkpoint.with_suffix(".pt.partial")
-            torch.save(state, partial)
-            partial.replace(checkpoint)
+            save_atomically(state, checkpoint)
         if world > 1:
             dist.barrier()
     dataset = dataset_record(config.data.dataset_dir)

@@ -36,7 +36,12 @@ from torch import distributed as dist
 from torch import nn
 from torch.nn import functional as F
 
-from mvgrasp_training._files import check_resumable, checkpoint_identity, write_text_atomically
+from mvgrasp_training._files import (
+    check_resumable,
+    checkpoint_identity,
+    save_atomically,
+    write_text_atomically,
+)
 from mvgrasp_training.config import LsmExperimentConfig, load_config
 from mvgrasp_training.export import export_lsm
 from mvgrasp_training.lsm import LSM, LsmArchitecture, grid_centre, ray_depths, scale_intrinsics
@@ -143,13 +148,6 @@ def evaluate(
                 errors[key][1] += int(where.sum())
     net.train()
     return {key: total / max(count, 1) for key, (total, count) in errors.items()}
-
-
-def save_atomically(state: dict, path: Path) -> None:
-    """``torch.save`` to ``path.partial``, then renamed: a kill mid-write leaves the old file."""
-    partial = path.with_suffix(path.suffix + ".partial")
-    torch.save(state, partial)
-    partial.replace(path)
 
 
 def export_best(config: LsmExperimentConfig, out: Path, stem: Path) -> Path:

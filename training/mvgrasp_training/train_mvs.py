@@ -34,14 +34,19 @@ import numpy as np
 import torch
 from torch.nn import functional as F
 
-from mvgrasp_training._files import check_resumable, checkpoint_identity, write_text_atomically
+from mvgrasp_training._files import (
+    check_resumable,
+    checkpoint_identity,
+    save_atomically,
+    write_text_atomically,
+)
 from mvgrasp_training.config import MvsExperimentConfig, load_config
 from mvgrasp_training.export import export_mvs
 from mvgrasp_training.lsm import grid_centre, scale_intrinsics
 from mvgrasp_training.mvs import MVS, MvsArchitecture, MvsOutput, depth_range
 from mvgrasp_training.plots import plot_lsm_history
 from mvgrasp_training.train import code_commit, dataset_record
-from mvgrasp_training.train_lsm import batch, load_dataset, save_atomically
+from mvgrasp_training.train_lsm import batch, load_dataset
 
 # The loss weights of the coarse, fine and refined depths.
 STAGE_WEIGHTS = (0.5, 1.0, 2.0)
