@@ -5,12 +5,12 @@
 use std::path::PathBuf;
 
 use mvgrasp_geometry::{Camera, HemisphereLayout, Intrinsics, IntrinsicsPreset, Pose3, Vec3};
-use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2, PyReadonlyArrayDyn};
+use numpy::{PyArray1, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use crate::arrays::{intrinsics_of, k_array, pose_array, pose_of};
+use crate::arrays::{array_of, depth_of, intrinsics_of, k_array, optional_pose, pose_array};
 use crate::convert::to_python;
 use crate::errors::camera_error;
 
@@ -97,12 +97,12 @@ pub(crate) fn hemisphere_cameras<'py>(
 #[pyo3(signature = (depth, k, world_from_camera = None))]
 pub(crate) fn depth_to_points<'py>(
     py: Python<'py>,
-    depth: PyReadonlyArrayDyn<'py, f32>,
-    k: PyReadonlyArray2<'py, f64>,
-    world_from_camera: Option<PyReadonlyArray2<'py, f64>>,
+    depth: Bound<'py, PyAny>,
+    k: Bound<'py, PyAny>,
+    world_from_camera: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let (width, height, values) = crate::arrays::depth_of("depth", &depth)?;
-    let camera = camera_of(&k, width, height, world_from_camera.as_ref())?;
+    let (width, height, values) = depth_of("depth", &depth)?;
+    let camera = camera_of(&k, "depth", width, height, world_from_camera.as_ref())?;
     let points = py
         .detach(|| camera.depth_to_world_points(&values))
         .map_err(|e| PyValueError::new_err(format!("depth: {e}")))?;
@@ -113,16 +113,15 @@ pub(crate) fn depth_to_points<'py>(
 
 /// The camera of a 3x3 `k`, its image size and its pose (identity when `None`).
 fn camera_of(
-    k: &PyReadonlyArray2<'_, f64>,
+    k: &Bound<'_, PyAny>,
+    image: &str,
     width: u32,
     height: u32,
-    world_from_camera: Option<&PyReadonlyArray2<'_, f64>>,
+    world_from_camera: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Camera> {
     Ok(Camera {
-        intrinsics: intrinsics_of("k", k, width, height)?,
-        world_from_camera: world_from_camera
-            .map(|p| pose_of("world_from_camera", p))
-            .transpose()?
+        intrinsics: intrinsics_of("k", k, image, width, height)?,
+        world_from_camera: optional_pose("world_from_camera", world_from_camera)?
             .unwrap_or(Pose3::IDENTITY),
     })
 }
@@ -133,15 +132,22 @@ fn camera_of(
 #[pyo3(signature = (points, k, width, height, world_from_camera = None))]
 pub(crate) fn project_points<'py>(
     py: Python<'py>,
-    points: PyReadonlyArray2<'py, f64>,
-    k: PyReadonlyArray2<'py, f64>,
+    points: Bound<'py, PyAny>,
+    k: Bound<'py, PyAny>,
     width: u32,
     height: u32,
-    world_from_camera: Option<PyReadonlyArray2<'py, f64>>,
+    world_from_camera: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let camera = camera_of(&k, width, height, world_from_camera.as_ref())?;
-    let p = points.as_array();
-    if p.ncols() != 3 {
+    let camera = camera_of(
+        &k,
+        "width x height",
+        width,
+        height,
+        world_from_camera.as_ref(),
+    )?;
+    let p = array_of::<f64>("points", &points)?;
+    let p = p.as_array();
+    if p.ndim() != 2 || p.shape()[1] != 3 {
         return Err(PyValueError::new_err(format!(
             "points: shape {:?}, expected (N, 3)",
             p.shape()
@@ -158,7 +164,7 @@ pub(crate) fn project_points<'py>(
         })
         .collect();
     Ok(PyArray1::from_vec(py, pixels)
-        .reshape([p.nrows(), 2])?
+        .reshape([p.shape()[0], 2])?
         .into_any())
 }
 
@@ -168,16 +174,26 @@ pub(crate) fn project_points<'py>(
 #[pyo3(signature = (pixels, depths, k, width, height, world_from_camera = None))]
 pub(crate) fn unproject_pixels<'py>(
     py: Python<'py>,
-    pixels: PyReadonlyArray2<'py, f64>,
-    depths: PyReadonlyArrayDyn<'py, f64>,
-    k: PyReadonlyArray2<'py, f64>,
+    pixels: Bound<'py, PyAny>,
+    depths: Bound<'py, PyAny>,
+    k: Bound<'py, PyAny>,
     width: u32,
     height: u32,
-    world_from_camera: Option<PyReadonlyArray2<'py, f64>>,
+    world_from_camera: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let camera = camera_of(&k, width, height, world_from_camera.as_ref())?;
-    let (px, d) = (pixels.as_array(), depths.as_array());
-    if px.ncols() != 2 || d.shape() != [px.nrows()] {
+    let camera = camera_of(
+        &k,
+        "width x height",
+        width,
+        height,
+        world_from_camera.as_ref(),
+    )?;
+    let (px, d) = (
+        array_of::<f64>("pixels", &pixels)?,
+        array_of::<f64>("depths", &depths)?,
+    );
+    let (px, d) = (px.as_array(), d.as_array());
+    if px.ndim() != 2 || px.shape()[1] != 2 || d.shape() != [px.shape()[0]] {
         return Err(PyValueError::new_err(format!(
             "pixels {:?} and depths {:?}: expected (N, 2) and (N,)",
             px.shape(),
@@ -196,6 +212,6 @@ pub(crate) fn unproject_pixels<'py>(
         })
         .collect();
     Ok(PyArray1::from_vec(py, points)
-        .reshape([px.nrows(), 3])?
+        .reshape([px.shape()[0], 3])?
         .into_any())
 }

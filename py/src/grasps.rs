@@ -9,18 +9,17 @@ use mvgrasp::grasp::{
     Grasp, GraspObject, Gripper, check_collision as collision_of, sample_antipodal,
 };
 use mvgrasp::grasp_dataset::GraspDatasetConfig;
-use numpy::{AllowTypeChange, PyArrayLike2, PyReadonlyArray2, PyReadonlyArrayDyn};
 use pyo3::prelude::*;
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 
-use crate::arrays::{mesh_of, pose_of, poses_of};
+use crate::arrays::{mesh_of, optional_pose, pose_of, poses_of};
 use crate::convert::{from_python, to_python};
 use crate::errors::{grasp_error, pipeline_error};
 
-/// The vertices and triangles arguments.
-type Vertices<'py> = PyArrayLike2<'py, f32, AllowTypeChange>;
-type Triangles<'py> = PyArrayLike2<'py, i64, AllowTypeChange>;
+/// The vertices and triangles arguments (any real and integer dtypes, [`mesh_of`]).
+type Vertices<'py> = Bound<'py, PyAny>;
+type Triangles<'py> = Bound<'py, PyAny>;
 
 /// The gripper `spec` names: `None` (the grasp datasets' gripper, the Panda), a preset name, a
 /// gripper file (`.toml`, `.json`, Dex-Net's `params.json`, `.urdf`), or a dict of
@@ -86,16 +85,14 @@ pub(crate) fn sample_grasps<'py>(
     triangles: Triangles<'py>,
     gripper: Option<Bound<'py, PyAny>>,
     count: usize,
-    table_from_object: Option<PyReadonlyArray2<'py, f64>>,
+    table_from_object: Option<Bound<'py, PyAny>>,
     params: Option<Bound<'py, PyAny>>,
     seed: u64,
 ) -> PyResult<Bound<'py, PyAny>> {
     let gripper = gripper_of(gripper.as_ref())?;
     let mut params = params_of(params.as_ref(), GraspDatasetConfig::default().sampling)?;
     params.target_grasps = count;
-    let table = table_from_object
-        .map(|p| pose_of("table_from_object", &p))
-        .transpose()?;
+    let table = optional_pose("table_from_object", table_from_object.as_ref())?;
     on_object(py, &vertices, &triangles, |object| {
         sample_antipodal(object, &gripper, &params, table.as_ref(), seed)
     })
@@ -109,7 +106,7 @@ pub(crate) fn grasp_quality<'py>(
     py: Python<'py>,
     vertices: Vertices<'py>,
     triangles: Triangles<'py>,
-    object_from_gripper: PyReadonlyArray2<'py, f64>,
+    object_from_gripper: Bound<'py, PyAny>,
     gripper: Option<Bound<'py, PyAny>>,
     friction_coef: f32,
     params: Option<Bound<'py, PyAny>>,
@@ -133,7 +130,7 @@ pub(crate) fn robust_quality<'py>(
     py: Python<'py>,
     vertices: Vertices<'py>,
     triangles: Triangles<'py>,
-    object_from_grippers: PyReadonlyArrayDyn<'py, f64>,
+    object_from_grippers: Bound<'py, PyAny>,
     gripper: Option<Bound<'py, PyAny>>,
     params: Option<Bound<'py, PyAny>>,
     seed: u64,
@@ -155,16 +152,14 @@ pub(crate) fn check_collision<'py>(
     py: Python<'py>,
     vertices: Vertices<'py>,
     triangles: Triangles<'py>,
-    object_from_gripper: PyReadonlyArray2<'py, f64>,
+    object_from_gripper: Bound<'py, PyAny>,
     width_m: f32,
     gripper: Option<Bound<'py, PyAny>>,
-    table_from_object: Option<PyReadonlyArray2<'py, f64>>,
+    table_from_object: Option<Bound<'py, PyAny>>,
     params: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let pose = pose_of("object_from_gripper", &object_from_gripper)?;
-    let table = table_from_object
-        .map(|p| pose_of("table_from_object", &p))
-        .transpose()?;
+    let table = optional_pose("table_from_object", table_from_object.as_ref())?;
     let gripper = gripper_of(gripper.as_ref())?;
     let params = params_of(
         params.as_ref(),
@@ -191,8 +186,8 @@ pub(crate) fn physics_trial<'py>(
     py: Python<'py>,
     vertices: Vertices<'py>,
     triangles: Triangles<'py>,
-    table_from_object: PyReadonlyArray2<'py, f64>,
-    world_from_gripper: PyReadonlyArray2<'py, f64>,
+    table_from_object: Bound<'py, PyAny>,
+    world_from_gripper: Bound<'py, PyAny>,
     width_m: f32,
     gripper: Option<Bound<'py, PyAny>>,
     params: Option<Bound<'py, PyAny>>,

@@ -4,10 +4,11 @@ use std::path::{Path, PathBuf};
 
 use mvgrasp::planner::models;
 use mvgrasp_infer::{Gqcnn, GqcnnWorkspace, Tensor};
-use numpy::{PyArray1, PyArrayMethods, PyReadonlyArrayDyn};
+use numpy::{PyArray1, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
+use crate::arrays::array_of;
 use crate::convert::to_python;
 use crate::errors::WeightsError;
 
@@ -46,13 +47,17 @@ pub(crate) fn load_network(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, 
 pub(crate) fn score_crops<'py>(
     py: Python<'py>,
     model: &str,
-    depth: PyReadonlyArrayDyn<'py, f32>,
-    pose: PyReadonlyArrayDyn<'py, f32>,
+    depth: Bound<'py, PyAny>,
+    pose: Bound<'py, PyAny>,
     logits: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let net = load_model(model)?;
     let arch = net.architecture();
     let (s, p) = (arch.image_size_px, arch.pose_inputs);
+    let (depth, pose) = (
+        array_of::<f32>("depth", &depth)?,
+        array_of::<f32>("pose", &pose)?,
+    );
     let d = depth.as_array();
     let n = d.shape().first().copied().unwrap_or(0);
     if d.shape() != [n, s, s] && d.shape() != [n, 1, s, s] {
@@ -64,7 +69,7 @@ pub(crate) fn score_crops<'py>(
     let q = pose.as_array();
     if q.shape() != [n, p] && !(p == 1 && q.shape() == [n]) {
         return Err(PyValueError::new_err(format!(
-            "pose: shape {:?}, expected ({n}, {p}){} for {model} (one row per crop)",
+            "pose: shape {:?}, expected ({n}, {p}){} for {model} (one row per crop of depth)",
             q.shape(),
             if p == 1 {
                 format!(" or ({n},)")

@@ -3,7 +3,7 @@
 
 use mvgrasp_geometry::objects::generate;
 use mvgrasp_geometry::{Category, RestingPoses};
-use numpy::{AllowTypeChange, PyArray2, PyArrayLike2};
+use numpy::PyArray2;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
@@ -40,8 +40,8 @@ pub(crate) fn builtin_object<'py>(
 #[pyfunction]
 pub(crate) fn mesh_from_arrays<'py>(
     py: Python<'py>,
-    vertices: PyArrayLike2<'py, f32, AllowTypeChange>,
-    triangles: PyArrayLike2<'py, i64, AllowTypeChange>,
+    vertices: Bound<'py, PyAny>,
+    triangles: Bound<'py, PyAny>,
 ) -> PyResult<MeshArrays<'py>> {
     mesh_arrays(py, &mesh_of(&vertices, &triangles)?)
 }
@@ -54,8 +54,8 @@ pub(crate) fn mesh_from_arrays<'py>(
 #[pyo3(signature = (vertices, triangles, density_kg_m3 = 1000.0))]
 pub(crate) fn mass_properties<'py>(
     py: Python<'py>,
-    vertices: PyArrayLike2<'py, f32, AllowTypeChange>,
-    triangles: PyArrayLike2<'py, i64, AllowTypeChange>,
+    vertices: Bound<'py, PyAny>,
+    triangles: Bound<'py, PyAny>,
     density_kg_m3: f32,
 ) -> PyResult<Bound<'py, PyDict>> {
     let mesh = mesh_of(&vertices, &triangles)?;
@@ -89,8 +89,8 @@ pub(crate) fn mass_properties<'py>(
 #[pyfunction]
 pub(crate) fn stable_poses<'py>(
     py: Python<'py>,
-    vertices: PyArrayLike2<'py, f32, AllowTypeChange>,
-    triangles: PyArrayLike2<'py, i64, AllowTypeChange>,
+    vertices: Bound<'py, PyAny>,
+    triangles: Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyList>> {
     let mesh = mesh_of(&vertices, &triangles)?;
     let rest = py.detach(|| RestingPoses::of(&mesh)).map_err(mesh_error)?;

@@ -10,36 +10,18 @@ use mvgrasp::planner::{
 use mvgrasp::stereo::RgbView;
 use mvgrasp_geometry::{Camera, Pose3};
 use mvgrasp_infer::Gqcnn;
-use numpy::{
-    AllowTypeChange, PyArray1, PyArrayLike2, PyArrayMethods, PyReadonlyArray2, PyReadonlyArray3,
-    PyReadonlyArrayDyn,
-};
+use numpy::{PyArray1, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyString;
 
-use crate::arrays::{depth_of, intrinsics_of, mesh_of, pose_of};
+use crate::arrays::{
+    array_of, depth_of, image_size, intrinsics_of, mask_of, mesh_of, optional_pose, pose_of,
+};
 use crate::convert::to_python;
 use crate::errors::{camera_error, pipeline_error};
 use crate::networks::load_model;
 use crate::render::{backend_of, renderer};
-
-/// A mask's pixels, which must be its image's size.
-fn mask_of(
-    name: &str,
-    mask: &PyReadonlyArray2<'_, bool>,
-    width: u32,
-    height: u32,
-) -> PyResult<Vec<bool>> {
-    let m = mask.as_array();
-    if m.shape() != [height as usize, width as usize] {
-        return Err(PyValueError::new_err(format!(
-            "{name}: shape {:?}, expected the image's ({height}, {width})",
-            m.shape()
-        )));
-    }
-    Ok(m.iter().copied().collect())
-}
 
 /// Refuses lists of per-view inputs of different lengths (`names` and their lengths, the
 /// first the views'), or fewer than `min` views.
@@ -104,10 +86,10 @@ fn network(model: Option<&str>, options: &PlanOptions) -> PyResult<Gqcnn> {
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn plan_depth<'py>(
     py: Python<'py>,
-    depth: PyReadonlyArrayDyn<'py, f32>,
-    k: PyReadonlyArray2<'py, f64>,
-    mask: Option<PyReadonlyArray2<'py, bool>>,
-    world_from_camera: Option<PyReadonlyArray2<'py, f64>>,
+    depth: Bound<'py, PyAny>,
+    k: Bound<'py, PyAny>,
+    mask: Option<Bound<'py, PyAny>>,
+    world_from_camera: Option<Bound<'py, PyAny>>,
     model: Option<&str>,
     fuse: bool,
     cem: bool,
@@ -116,11 +98,9 @@ pub(crate) fn plan_depth<'py>(
     as_json: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let (w, h, values) = depth_of("depth", &depth)?;
-    let intrinsics = intrinsics_of("k", &k, w, h)?;
+    let intrinsics = intrinsics_of("k", &k, "depth", w, h)?;
     let mask = mask.map(|m| mask_of("mask", &m, w, h)).transpose()?;
-    let pose = world_from_camera
-        .map(|p| pose_of("world_from_camera", &p))
-        .transpose()?;
+    let pose = optional_pose("world_from_camera", world_from_camera.as_ref())?;
     let options = options(fuse, cem, hand_check, seed);
     let net = network(model, &options)?;
     let file = py.detach(|| -> mvgrasp::Result<GraspsFile> {
@@ -153,10 +133,10 @@ pub(crate) fn plan_depth<'py>(
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn plan_views<'py>(
     py: Python<'py>,
-    depths: Vec<PyReadonlyArrayDyn<'py, f32>>,
-    ks: Vec<PyReadonlyArray2<'py, f64>>,
-    world_from_cameras: Vec<PyReadonlyArray2<'py, f64>>,
-    masks: Option<Vec<Option<PyReadonlyArray2<'py, bool>>>>,
+    depths: Vec<Bound<'py, PyAny>>,
+    ks: Vec<Bound<'py, PyAny>>,
+    world_from_cameras: Vec<Bound<'py, PyAny>>,
+    masks: Option<Vec<Option<Bound<'py, PyAny>>>>,
     model: Option<&str>,
     fuse: bool,
     cem: bool,
@@ -171,7 +151,7 @@ pub(crate) fn plan_views<'py>(
     let mut inputs = Vec::with_capacity(n);
     for i in 0..n {
         let (w, h, values) = depth_of(&format!("depths[{i}]"), &depths[i])?;
-        let intrinsics = intrinsics_of(&format!("ks[{i}]"), &ks[i], w, h)?;
+        let intrinsics = intrinsics_of(&format!("ks[{i}]"), &ks[i], &format!("depths[{i}]"), w, h)?;
         let pose = pose_of(&format!("world_from_cameras[{i}]"), &world_from_cameras[i])?;
         let mask = match masks.as_ref().and_then(|m| m[i].as_ref()) {
             Some(m) => Some(mask_of(&format!("masks[{i}]"), m, w, h)?),
@@ -212,8 +192,8 @@ pub(crate) fn plan_views<'py>(
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn plan_mesh<'py>(
     py: Python<'py>,
-    vertices: PyArrayLike2<'py, f32, AllowTypeChange>,
-    triangles: PyArrayLike2<'py, i64, AllowTypeChange>,
+    vertices: Bound<'py, PyAny>,
+    triangles: Bound<'py, PyAny>,
     model: Option<&str>,
     fuse: bool,
     cem: bool,
@@ -271,10 +251,10 @@ pub(crate) fn plan_mesh<'py>(
 /// 3x3 camera matrix, its pose and optionally its mask; at least `min_views` views (planning
 /// asks for two, the LSM's prediction takes one).
 fn rgb_views(
-    images: &[PyReadonlyArray3<'_, u8>],
-    ks: &[PyReadonlyArray2<'_, f64>],
-    world_from_cameras: &[PyReadonlyArray2<'_, f64>],
-    masks: Option<&Vec<Option<PyReadonlyArray2<'_, bool>>>>,
+    images: &[Bound<'_, PyAny>],
+    ks: &[Bound<'_, PyAny>],
+    world_from_cameras: &[Bound<'_, PyAny>],
+    masks: Option<&Vec<Option<Bound<'_, PyAny>>>>,
     min_views: usize,
 ) -> PyResult<Vec<RgbView>> {
     let n = images.len();
@@ -287,16 +267,18 @@ fn rgb_views(
     )?;
     let mut views = Vec::with_capacity(n);
     for i in 0..n {
-        let image = images[i].as_array();
+        let name = format!("images[{i}]");
+        let image = array_of::<u8>(&name, &images[i])?;
+        let image = image.as_array();
         let [h, w, 3] = *image.shape() else {
             return Err(PyValueError::new_err(format!(
-                "images[{i}]: shape {:?}, expected (H, W, 3)",
+                "{name}: shape {:?}, expected (H, W, 3)",
                 image.shape()
             )));
         };
-        let (w, h) = (w as u32, h as u32);
+        let (w, h) = image_size(&name, image.shape(), h, w)?;
         let camera = Camera {
-            intrinsics: intrinsics_of(&format!("ks[{i}]"), &ks[i], w, h)?,
+            intrinsics: intrinsics_of(&format!("ks[{i}]"), &ks[i], &name, w, h)?,
             world_from_camera: pose_of(
                 &format!("world_from_cameras[{i}]"),
                 &world_from_cameras[i],
@@ -327,10 +309,10 @@ fn rgb_views(
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn plan_rgb<'py>(
     py: Python<'py>,
-    images: Vec<PyReadonlyArray3<'py, u8>>,
-    ks: Vec<PyReadonlyArray2<'py, f64>>,
-    world_from_cameras: Vec<PyReadonlyArray2<'py, f64>>,
-    masks: Option<Vec<Option<PyReadonlyArray2<'py, bool>>>>,
+    images: Vec<Bound<'py, PyAny>>,
+    ks: Vec<Bound<'py, PyAny>>,
+    world_from_cameras: Vec<Bound<'py, PyAny>>,
+    masks: Option<Vec<Option<Bound<'py, PyAny>>>>,
     model: Option<&str>,
     depth_from: &str,
     cem: bool,
@@ -360,10 +342,10 @@ pub(crate) fn plan_rgb<'py>(
 #[pyo3(signature = (images, ks, world_from_cameras, *, masks = None, depth_from = "baseline"))]
 pub(crate) fn predict_depth<'py>(
     py: Python<'py>,
-    images: Vec<PyReadonlyArray3<'py, u8>>,
-    ks: Vec<PyReadonlyArray2<'py, f64>>,
-    world_from_cameras: Vec<PyReadonlyArray2<'py, f64>>,
-    masks: Option<Vec<Option<PyReadonlyArray2<'py, bool>>>>,
+    images: Vec<Bound<'py, PyAny>>,
+    ks: Vec<Bound<'py, PyAny>>,
+    world_from_cameras: Vec<Bound<'py, PyAny>>,
+    masks: Option<Vec<Option<Bound<'py, PyAny>>>>,
     depth_from: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
     let predictor = predictor_of(depth_from)?;

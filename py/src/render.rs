@@ -7,12 +7,12 @@ use mvgrasp::convert::render_view;
 use mvgrasp::dataset::{DatasetConfig, SceneData, TABLE_HALF_SIDE_M, write_dataset};
 use mvgrasp::render::{Backend, Colors, Renderer};
 use mvgrasp_geometry::{Camera, Intrinsics, IntrinsicsPreset, Pose3};
-use numpy::{AllowTypeChange, PyArray1, PyArray2, PyArrayLike2, PyArrayMethods, PyReadonlyArray2};
+use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::arrays::{intrinsics_of, mesh_of, pose_of};
+use crate::arrays::{array_of, intrinsics_of, mesh_of, optional_pose, pose_of};
 use crate::errors::{RenderError, camera_error, dataset_error};
 use crate::grasp_dataset::library_sources;
 
@@ -66,14 +66,14 @@ pub(crate) fn random_colors(py: Python<'_>, seed: u64, n: usize) -> PyResult<Bou
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn render<'py>(
     py: Python<'py>,
-    vertices: PyArrayLike2<'py, f32, AllowTypeChange>,
-    triangles: PyArrayLike2<'py, i64, AllowTypeChange>,
-    ks: Vec<PyReadonlyArray2<'py, f64>>,
-    world_from_cameras: Vec<PyReadonlyArray2<'py, f64>>,
+    vertices: Bound<'py, PyAny>,
+    triangles: Bound<'py, PyAny>,
+    ks: Vec<Bound<'py, PyAny>>,
+    world_from_cameras: Vec<Bound<'py, PyAny>>,
     width: u32,
     height: u32,
-    world_from_object: Option<PyReadonlyArray2<'py, f64>>,
-    colors: Option<PyReadonlyArray2<'py, u8>>,
+    world_from_object: Option<Bound<'py, PyAny>>,
+    colors: Option<Bound<'py, PyAny>>,
     per_face: bool,
     table: bool,
     backend: &str,
@@ -90,17 +90,16 @@ pub(crate) fn render<'py>(
     let mut cameras = Vec::with_capacity(ks.len());
     for (i, (k, pose)) in ks.iter().zip(&world_from_cameras).enumerate() {
         cameras.push(Camera {
-            intrinsics: intrinsics_of(&format!("ks[{i}]"), k, width, height)?,
+            intrinsics: intrinsics_of(&format!("ks[{i}]"), k, "width x height", width, height)?,
             world_from_camera: pose_of(&format!("world_from_cameras[{i}]"), pose)?,
         });
     }
-    let pose = match world_from_object {
-        Some(p) => pose_of("world_from_object", &p)?,
-        None => Pose3::IDENTITY,
-    };
+    let pose =
+        optional_pose("world_from_object", world_from_object.as_ref())?.unwrap_or(Pose3::IDENTITY);
     let colors: Option<Vec<[u8; 3]>> = match colors {
         None => None,
         Some(c) => {
+            let c = array_of::<u8>("colors", &c)?;
             let c = c.as_array();
             let (what, expected, flag) = if per_face {
                 ("triangle", mesh.triangles().len(), "True")

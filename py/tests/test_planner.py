@@ -200,5 +200,5 @@ def test_planning_on_rgb_views_writes_the_cli_grasps_json_byte_for_byte(tmp_path
         mvgrasp.Planner().plan_rgb(images[:1], cameras[:1])
     with pytest.raises(ValueError, match=r"images\[0\]: shape"):
         mvgrasp.Planner().plan_rgb([images[0][..., :2], images[1]], cameras[:2])
-    with pytest.raises(TypeError, match="images"):  # grey: not (H, W, 3)
+    with pytest.raises(ValueError, match=r"images\[0\]: shape"):  # grey: not (H, W, 3)
         mvgrasp.Planner().plan_rgb([images[0][..., 0], images[1]], cameras[:2])

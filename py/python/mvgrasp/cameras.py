@@ -15,7 +15,16 @@ import numpy as np
 import numpy.typing as npt
 
 from mvgrasp import _native
-from mvgrasp._arrays import f64, optional_f64
+from mvgrasp._arrays import f32, f64, optional_f64
+
+
+def _atleast(a: npt.ArrayLike, ndim: int) -> Any:
+    """``a`` with leading axes of 1 up to ``ndim`` (one point as a batch of one); what NumPy
+    cannot make an array of as it is, for the conversion to name."""
+    try:
+        return np.atleast_2d(a) if ndim == 2 else np.atleast_1d(a)
+    except (TypeError, ValueError):
+        return a
 
 
 @dataclass(frozen=True)
@@ -39,7 +48,12 @@ class Camera:
             width, height = i["width"], i["height"]
         else:
             width, height = d["width"], d["height"]
-        return cls(f64(k), int(width), int(height), optional_f64(d.get("world_from_camera")))
+        return cls(
+            f64(k, "k"),
+            int(width),
+            int(height),
+            optional_f64(d.get("world_from_camera"), "world_from_camera"),
+        )
 
     @classmethod
     def preset(
@@ -63,25 +77,30 @@ class Camera:
         return cls.from_dict({"intrinsics": i, "world_from_camera": world_from_camera})
 
     def _args(self) -> tuple[np.ndarray, int, int, Optional[np.ndarray]]:
-        return f64(self.k), self.width, self.height, optional_f64(self.world_from_camera)
+        return (
+            f64(self.k, "camera.k"),
+            self.width,
+            self.height,
+            optional_f64(self.world_from_camera, "camera.world_from_camera"),
+        )
 
     def project(self, points: npt.ArrayLike) -> np.ndarray:
         """The ``(N, 2)`` pixels (u, v) of world points ``(N, 3)``; NaN behind the camera."""
         k, w, h, pose = self._args()
-        return _native.project_points(f64(np.atleast_2d(points)), k, w, h, pose)
+        return _native.project_points(f64(_atleast(points, 2), "points"), k, w, h, pose)
 
     def unproject(self, pixels: npt.ArrayLike, depths: npt.ArrayLike) -> np.ndarray:
         """The ``(N, 3)`` world points at pixels ``(N, 2)`` and depths ``(N,)`` (metres along
         the optical axis)."""
         k, w, h, pose = self._args()
         return _native.unproject_pixels(
-            f64(np.atleast_2d(pixels)), f64(np.atleast_1d(depths)), k, w, h, pose
+            f64(_atleast(pixels, 2), "pixels"), f64(_atleast(depths, 1), "depths"), k, w, h, pose
         )
 
     def depth_to_points(self, depth: npt.ArrayLike) -> np.ndarray:
         """The world points of a depth image of this camera, one per valid pixel."""
         k, _, _, pose = self._args()
-        return _native.depth_to_points(np.ascontiguousarray(depth, dtype=np.float32), k, pose)
+        return _native.depth_to_points(f32(depth, "depth"), k, pose)
 
 
 def hemisphere(

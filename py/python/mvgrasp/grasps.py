@@ -125,7 +125,7 @@ def sample_grasps(
         triangles,
         gripper=_gripper(gripper),
         count=count,
-        table_from_object=optional_f64(table_from_object),
+        table_from_object=optional_f64(table_from_object, "table_from_object"),
         params=params,
         seed=seed,
     )
@@ -154,7 +154,7 @@ def grasp_quality(
     return _native.grasp_quality(
         vertices,
         triangles,
-        f64(pose),
+        f64(pose, "grasp"),
         gripper=_gripper(gripper),
         friction_coef=friction_coef,
         params=params,
@@ -182,7 +182,12 @@ def robust_quality(
     else:
         poses = grasps
     return _native.robust_quality(
-        vertices, triangles, f64(poses), gripper=_gripper(gripper), params=params, seed=seed
+        vertices,
+        triangles,
+        f64(poses, "grasps"),
+        gripper=_gripper(gripper),
+        params=params,
+        seed=seed,
     )
 
 
@@ -200,10 +205,10 @@ def check_collision(
     return _native.check_collision(
         vertices,
         triangles,
-        f64(grasp.world_from_gripper),
+        f64(grasp.world_from_gripper, "grasp.world_from_gripper"),
         grasp.width_m,
         gripper=_gripper(gripper),
-        table_from_object=optional_f64(table_from_object),
+        table_from_object=optional_f64(table_from_object, "table_from_object"),
         params=params,
     )
 
@@ -226,8 +231,8 @@ def physics_trial(
     return _native.physics_trial(
         vertices,
         triangles,
-        f64(table_from_object),
-        f64(grasp.world_from_gripper),
+        f64(table_from_object, "table_from_object"),
+        f64(grasp.world_from_gripper, "grasp.world_from_gripper"),
         grasp.width_m,
         gripper=_gripper(gripper),
         params=params,

@@ -24,7 +24,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mvgrasp import _native
-from mvgrasp._arrays import f32, f64, optional_f64
+from mvgrasp._arrays import as_dtype, f32, f64, optional_f64
 from mvgrasp._arrays import masks as _masks
 from mvgrasp.cameras import Camera
 from mvgrasp.grasps import Grasp
@@ -156,7 +156,10 @@ class PlanResult:
 def _check_size(name: str, image: npt.ArrayLike, camera: Camera, camera_name: str) -> None:
     """``ValueError`` naming both when ``image``'s (H, W) is not ``camera``'s size (a depth
     image at half resolution must come with its halved intrinsics, as ``plan --depth`` asks)."""
-    shape = np.shape(image)
+    try:
+        shape = np.shape(image)
+    except (TypeError, ValueError):
+        return  # not an array: the conversion names it
     if len(shape) >= 2 and (shape[0], shape[1]) != (camera.height, camera.width):
         raise ValueError(
             f"{name}: {shape[1]} x {shape[0]} pixels, but {camera_name} is "
@@ -170,7 +173,10 @@ def _posed(cameras: Sequence[Camera]) -> tuple[list[np.ndarray], list[np.ndarray
     for i, c in enumerate(cameras):
         if c.world_from_camera is None:
             raise ValueError(f"cameras[{i}]: no world_from_camera (views need their poses)")
-    return [f64(c.k) for c in cameras], [f64(c.world_from_camera) for c in cameras]
+    ks = [f64(c.k, f"cameras[{i}].k") for i, c in enumerate(cameras)]
+    poses = [f64(c.world_from_camera, f"cameras[{i}].world_from_camera")
+             for i, c in enumerate(cameras)]  # fmt: skip
+    return ks, poses
 
 
 class Planner:
@@ -222,10 +228,10 @@ class Planner:
             k = camera
         started = time.perf_counter()
         text = _native.plan_depth(
-            f32(depth),
-            f64(k),
-            mask=None if mask is None else np.asarray(mask, dtype=bool),
-            world_from_camera=optional_f64(world_from_camera),
+            f32(depth, "depth"),
+            f64(k, "camera.k" if isinstance(camera, Camera) else "camera"),
+            mask=None if mask is None else as_dtype(mask, bool, "mask"),
+            world_from_camera=optional_f64(world_from_camera, "world_from_camera"),
             as_json=True,
             **self._options(),
         )
@@ -244,7 +250,7 @@ class Planner:
             _check_size(f"depths[{i}]", d, c, f"cameras[{i}]")
         started = time.perf_counter()
         text = _native.plan_views(
-            [f32(d) for d in depths],
+            [f32(d, f"depths[{i}]") for i, d in enumerate(depths)],
             *_posed(cameras),
             masks=_masks(masks),
             as_json=True,
@@ -272,7 +278,7 @@ class Planner:
         options = self._options()
         options.pop("fuse")
         text = _native.plan_rgb(
-            [np.ascontiguousarray(i, dtype=np.uint8) for i in images],
+            [as_dtype(image, np.uint8, f"images[{i}]") for i, image in enumerate(images)],
             *_posed(cameras),
             masks=_masks(masks),
             depth_from=depth_from,
