@@ -121,3 +121,26 @@ def test_a_local_ray_cluster_writes_the_same_bytes(
     finally:
         ray.shutdown()
     assert files(tmp_path) == files(single_machine)
+
+
+def test_a_changed_shard_is_refused_by_its_checksum_and_made_again(
+    single_machine: Path, config: Path, tmp_path: Path
+) -> None:
+    # A copy, so that the module's dataset stays as it was for the other tests.
+    out = tmp_path / "copy"
+    out.mkdir()
+    for name, data in files(single_machine).items():
+        (out / name).write_bytes(data)
+    manifest = json.loads((out / "dataset.json").read_text())
+    record = manifest["shards"][1]
+    assert len(record["sha256"]) == 64
+    shard = out / record["file"]
+    whole = shard.read_bytes()
+    shard.write_bytes(whole[:-1] + bytes([whole[-1] ^ 1]))
+    dataset = grasp_dataset.GraspDataset.open(out)
+    with pytest.raises(mvgrasp.DatasetError, match=rf"{record['file']}: its SHA-256"):
+        list(dataset.shards())
+    # A rerun makes the changed shard again, byte for byte.
+    grasp_dataset.generate(out, config, categories=CATEGORIES)
+    assert files(out) == files(single_machine)
+    assert sum(1 for _ in grasp_dataset.GraspDataset.open(out).shards()) == 3

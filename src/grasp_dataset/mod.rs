@@ -325,7 +325,7 @@ fn make_shard(
         }
     }
     record.counts = Counts::of(&points);
-    write_shard(out, &points, plan.config.crop.size_px as usize, &record)?;
+    write_shard(out, &points, plan.config.crop.size_px as usize, &mut record)?;
     Ok(record)
 }
 

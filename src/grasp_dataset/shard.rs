@@ -99,6 +99,11 @@ pub struct ShardRecord {
     /// Empty in shards made before it was recorded.
     #[serde(default)]
     pub plan_hash: String,
+    /// The SHA-256 of the shard's file (hex): a file that does not match it is not the shard
+    /// that was written (changed or damaged), so a rerun makes it again and the training code
+    /// refuses it. Empty in shards made before it was recorded.
+    #[serde(default)]
+    pub sha256: String,
 }
 
 /// What a set of datapoints holds; summed over shards for a dataset's totals.
@@ -195,7 +200,7 @@ pub fn write_shard(
     dir: &Path,
     points: &[Datapoint],
     crop_size: usize,
-    record: &ShardRecord,
+    record: &mut ShardRecord,
 ) -> Result<()> {
     let n = points.len();
     let flat4 = |m: &[[f32; 4]; 4]| m.concat();
@@ -362,6 +367,7 @@ pub fn write_shard(
         source,
         path: shard_path.clone(),
     })?;
+    record.sha256 = sha256_hex(&bytes);
     let sidecar = sidecar_path(dir, record.index);
     write_atomically(
         &sidecar,
@@ -477,11 +483,20 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
 
 /// A finished shard's sidecar, if the shard and its sidecar are both there.
 pub fn finished_shard(dir: &Path, index: usize) -> Option<ShardRecord> {
-    if !dir.join(shard_file(index)).is_file() {
-        return None;
-    }
+    let bytes = std::fs::read(dir.join(shard_file(index))).ok()?;
     let text = std::fs::read_to_string(sidecar_path(dir, index)).ok()?;
-    serde_json::from_str(&text).ok()
+    let record: ShardRecord = serde_json::from_str(&text).ok()?;
+    // A shard whose bytes are not the ones recorded is made again.
+    (record.sha256.is_empty() || record.sha256 == sha256_hex(&bytes)).then_some(record)
+}
+
+/// The SHA-256 of `bytes`, lower-case hex.
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    use sha2::Digest;
+    sha2::Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
 }
 
 #[cfg(test)]
@@ -523,13 +538,16 @@ mod tests {
     fn a_shard_reads_back_as_written_and_a_damaged_one_is_named() {
         let dir = tempfile::tempdir().unwrap();
         let points = [datapoint(0, 3), datapoint(1, 3)];
-        let record = ShardRecord {
+        let mut record = ShardRecord {
             file: shard_file(4),
             index: 4,
             ..ShardRecord::default()
         };
-        write_shard(dir.path(), &points, 3, &record).unwrap();
+        write_shard(dir.path(), &points, 3, &mut record).unwrap();
         let path = dir.path().join(shard_file(4));
+        // The record carries the file's checksum: finished while the bytes match it.
+        assert_eq!(record.sha256, sha256_hex(&std::fs::read(&path).unwrap()));
+        assert_eq!(finished_shard(dir.path(), 4), Some(record.clone()));
         let columns = read_shard(&path).unwrap();
         assert_eq!(columns.len(), COLUMNS.len());
         let column = |name: &str| columns.iter().find(|c| c.name == name).unwrap();
@@ -550,8 +568,14 @@ mod tests {
             201.0f32.to_le_bytes()
         );
 
-        // Cut short: the file and the fault named.
+        // A shard whose bytes changed is not finished: a rerun makes it again.
         let bytes = std::fs::read(&path).unwrap();
+        let mut changed = bytes.clone();
+        *changed.last_mut().unwrap() ^= 1;
+        std::fs::write(&path, &changed).unwrap();
+        assert_eq!(finished_shard(dir.path(), 4), None);
+        std::fs::write(&path, &bytes).unwrap();
+        // Cut short: the file and the fault named.
         let cut = dir.path().join("cut.safetensors");
         std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
         let message = read_shard(&cut).unwrap_err().to_string();

@@ -15,6 +15,7 @@ library (``per_category`` objects of each of ``categories``, default all).
 
 from __future__ import annotations
 
+import hashlib
 import os
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
@@ -24,6 +25,7 @@ from typing import Any, Optional, Union
 import numpy as np
 
 from mvgrasp import _native
+from mvgrasp._native import DatasetError
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -137,9 +139,23 @@ class GraspDataset:
         return cls(Path(root), _native.read_grasp_manifest(os.fspath(root)))
 
     def shards(self) -> Iterator[dict[str, np.ndarray]]:
-        """The finished shards' columns, in index order."""
+        """The finished shards' columns, in index order; :class:`mvgrasp.DatasetError` naming
+        a shard whose bytes are not the ones the manifest records (its ``sha256``: changed or
+        damaged since it was written)."""
         for record in self.manifest["shards"]:
-            yield read_shard(self.root / record["file"])
+            path = self.root / record["file"]
+            expected = record.get("sha256", "")
+            if expected:
+                try:
+                    found = hashlib.sha256(path.read_bytes()).hexdigest()
+                except OSError as error:
+                    raise DatasetError(f"{path}: cannot read the shard: {error}") from error
+                if found != expected:
+                    raise DatasetError(
+                        f"{path}: its SHA-256 is {found}, the manifest records {expected} "
+                        "(changed or damaged since it was written; make it again)"
+                    )
+            yield read_shard(path)
 
     def object_ids(self) -> list[int]:
         """The ids of the dataset's objects, in manifest order."""
