@@ -54,6 +54,18 @@ const RULES: &[(&str, &str, &[&str], &[&str])] = &[
         &["pyo3", "numpy"],
     ),
     (
+        // The fuzz targets call the readers of every crate; nothing depends on them.
+        "mvgrasp-fuzz",
+        "crates/fuzz/Cargo.toml",
+        &[
+            "mvgrasp",
+            "mvgrasp-geometry",
+            "mvgrasp-grasp",
+            "mvgrasp-infer",
+        ],
+        &["pyo3", "numpy"],
+    ),
+    (
         "mvgrasp-py",
         "py/Cargo.toml",
         &[
