@@ -347,7 +347,13 @@ pub fn generate(
     std::fs::create_dir_all(out).map_err(Error::io("create", out))?;
     plan.check_existing(out)?;
     remove_temporary_files(out)?;
-    plan.write_manifest(out)?;
+    // The shards an earlier run finished, each read and checked once.
+    let mut finished: std::collections::BTreeMap<usize, ShardRecord> = plan
+        .write_manifest(out)?
+        .shards
+        .into_iter()
+        .map(|record| (record.index, record))
+        .collect();
     let bar = if progress {
         ProgressBar::new(sources.len() as u64)
     } else {
@@ -361,7 +367,7 @@ pub fn generate(
     let mut shards = Vec::with_capacity(plan.num_shards());
     let mut datapoints = 0;
     for index in 0..plan.num_shards() {
-        let record = match plan.finished(out, index)? {
+        let record = match finished.remove(&index) {
             Some(record) => {
                 summary.skipped += 1;
                 record
