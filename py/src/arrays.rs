@@ -83,15 +83,25 @@ pub(crate) fn array_of<'py, T: Element>(
         )));
     };
     check_size(name, array.shape())?;
+    // Only the same values in the other byte order may be copied (into this machine's).
     let given = array.dtype();
-    if given.is_equiv_to(&wanted) && array.is_aligned() {
-        return readonly(name, array.clone().into_any());
-    }
-    // The same values in the other byte order: a copy in this machine's.
     if !(given.kind() == wanted.kind() && given.itemsize() == wanted.itemsize()) {
         return Err(PyTypeError::new_err(format!(
             "{name}: dtype {given}, expected {wanted}"
         )));
+    }
+    in_place_or_copied(name, array.clone())
+}
+
+/// `array` read in place when it is already of dtype `T` and aligned, else its `astype` copy.
+fn in_place_or_copied<'py, T: Element>(
+    name: &str,
+    array: Bound<'py, PyUntypedArray>,
+) -> PyResult<PyReadonlyArrayDyn<'py, T>> {
+    let py = array.py();
+    let wanted = dtype::<T>(py);
+    if array.dtype().is_equiv_to(&wanted) && array.is_aligned() {
+        return readonly(name, array.into_any());
     }
     let copy = array
         .call_method1("astype", (wanted,))
@@ -123,13 +133,7 @@ pub(crate) fn array_cast<'py, T: Element>(
             .map_err(|e| named(py, name, e.into()))?,
     };
     check_size(name, array.shape())?;
-    if array.dtype().is_equiv_to(&wanted) && array.is_aligned() {
-        return readonly(name, array.into_any());
-    }
-    let copy = array
-        .call_method1("astype", (wanted,))
-        .map_err(|e| named(py, name, e))?;
-    readonly(name, copy)
+    in_place_or_copied(name, array)
 }
 
 /// Refuses NaN and infinities (in float32: a float64 beyond its range is one too).
