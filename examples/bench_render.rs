@@ -21,6 +21,8 @@ use clap::Parser;
 use mvgrasp_geometry::{Camera, HemisphereLayout, Intrinsics, TriangleMesh, Vec3};
 use mvgrasp_render::{Backend, Colors, IDENTITY, MeshInput, Renderer, View};
 
+mod common;
+
 /// Time mvgrasp's renderer on a mesh seen from the paper's hemisphere of cameras.
 #[derive(Parser, Debug)]
 #[command(about)]
@@ -107,7 +109,11 @@ fn run(args: &Args) -> Result<(), String> {
         ));
     }
     if let (Some(path), Some(frame)) = (&args.depth_out, frames.first()) {
-        write_npy_f32(path, &frame.depth_m, frame.height, frame.width)?;
+        common::write_npy_f32(
+            path,
+            &[frame.height as usize, frame.width as usize],
+            &frame.depth_m,
+        )?;
     }
 
     let mut call_ms = Vec::with_capacity(args.repeats);
@@ -192,26 +198,6 @@ fn write_cameras(path: &Path, mesh: &Path, target: Vec3, cameras: &[Camera]) -> 
     });
     let text = serde_json::to_string_pretty(&json).map_err(|e| e.to_string())?;
     std::fs::write(path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
-}
-
-/// Writes a float32 array of shape (rows, cols) as a NumPy `.npy` file (format 1.0).
-fn write_npy_f32(path: &Path, values: &[f32], rows: u32, cols: u32) -> Result<(), String> {
-    let mut header =
-        format!("{{'descr': '<f4', 'fortran_order': False, 'shape': ({rows}, {cols}), }}");
-    // Magic (6) + version (2) + length (2) + header, padded with spaces to 64 bytes, then '\n'.
-    while (10 + header.len() + 1) % 64 != 0 {
-        header.push(' ');
-    }
-    header.push('\n');
-    let length = u16::try_from(header.len()).map_err(|e| e.to_string())?;
-    let mut bytes = Vec::with_capacity(10 + header.len() + 4 * values.len());
-    bytes.extend_from_slice(b"\x93NUMPY\x01\x00");
-    bytes.extend_from_slice(&length.to_le_bytes());
-    bytes.extend_from_slice(header.as_bytes());
-    for v in values {
-        bytes.extend_from_slice(&v.to_le_bytes());
-    }
-    std::fs::write(path, bytes).map_err(|e| format!("cannot write {}: {e}", path.display()))
 }
 
 fn median(values: &mut [f64]) -> f64 {

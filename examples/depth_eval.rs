@@ -34,6 +34,7 @@ use mvgrasp::mvs::mvs_depths;
 use mvgrasp::planner::{DepthPredictor, RgbInput, models, render_rgb};
 use mvgrasp::render::{Backend, Renderer};
 use mvgrasp::stereo::{RgbView, SweepParams, sweep_depths};
+use mvgrasp::sweep_refiner::RefinedSweep;
 
 /// Depth from RGB views against the rendered depth, on unseen built-in objects.
 #[derive(Parser, Debug)]
@@ -97,6 +98,16 @@ fn run(args: &Args) -> Result<(), String> {
         .load()
         .map_err(|e| e.to_string())?
         .with_parallelism(Parallelism::all_threads());
+    // Every pixel kept, as the default run's one-view planner gets them.
+    let refined = RefinedSweep {
+        net: std::sync::Arc::new(
+            models::SWEEP_REFINER
+                .load()
+                .map_err(|e| e.to_string())?
+                .with_parallelism(Parallelism::all_threads()),
+        ),
+        min_confidence: 0.0,
+    };
     let counts = &args.views;
     if let Some(n) = counts.iter().find(|n| !(1..=10).contains(*n)) {
         return Err(format!(
@@ -113,12 +124,13 @@ fn run(args: &Args) -> Result<(), String> {
         radius_m: args.distance_m,
         ..HemisphereLayout::paper_test()
     };
-    // [n][method][top-down, all views]; method 0 LSM, 1 sweep, 2 hull, 3 MVS.
-    let mut tallies: Vec<[[DepthErrors; 2]; 4]> = vec![Default::default(); counts.len()];
-    // [n][LSM, baseline, hull (the baseline's), MVS]
-    let mut seconds = vec![[0.0f64; 4]; counts.len()];
-    // [n][confidence decile]: the MVS network's object pixels (all views) and those within 5 mm.
-    let mut reliability = vec![[[0usize; 2]; 10]; counts.len()];
+    // [n][method][top-down, all views]; method 0 LSM, 1 sweep, 2 hull, 3 MVS, 4 refined sweep.
+    let mut tallies: Vec<[[DepthErrors; 2]; 5]> = vec![Default::default(); counts.len()];
+    // [n][LSM, baseline, hull (the baseline's), MVS, refined]
+    let mut seconds = vec![[0.0f64; 5]; counts.len()];
+    // [network: MVS, refined][n][confidence decile]: the object pixels (all views) and those
+    // within 5 mm.
+    let mut reliability = vec![vec![[[0usize; 2]; 10]; counts.len()]; 2];
     let mut objects = 0;
     for category in Category::ALL {
         for index in 30..30 + args.per_category {
@@ -165,20 +177,34 @@ fn run(args: &Args) -> Result<(), String> {
                     Vec::new()
                 };
                 seconds[c][3] += started.elapsed().as_secs_f64();
+                let started = Instant::now();
+                let sharpened = if n >= 2 {
+                    refined.depths(&views).map_err(|e| e.to_string())?
+                } else {
+                    Vec::new()
+                };
+                seconds[c][4] += started.elapsed().as_secs_f64();
                 for (i, (lsm, (view, truth))) in learnt.iter().zip(&rendered).enumerate() {
                     let mask = view.mask.as_deref().unwrap_or(&[]);
                     let mut methods = vec![(0, lsm)];
                     if let Some(swept) = depths.get(i) {
                         methods.extend([(1, &swept.depth_m), (2, &swept.hull_m)]);
                     }
-                    if let Some(predicted) = stereo.get(i) {
-                        methods.push((3, &predicted.depth_m));
-                        let pixels = predicted.depth_m.iter().zip(&predicted.confidence);
-                        for (((&d, &confidence), &t), &m) in pixels.zip(truth).zip(mask) {
-                            if m && t > 0.0 {
+                    let confident = [
+                        stereo.get(i).map(|p| (3, &p.depth_m, &p.confidence)),
+                        sharpened.get(i).map(|p| (4, &p.depth_m, &p.confidence)),
+                    ];
+                    for (network, (m, depth, confidence)) in
+                        confident.into_iter().flatten().enumerate()
+                    {
+                        methods.push((m, depth));
+                        let pixels = depth.iter().zip(confidence);
+                        for (((&d, &confidence), &t), &on) in pixels.zip(truth).zip(mask) {
+                            if on && t > 0.0 {
                                 let decile = ((confidence * 10.0) as usize).min(9);
-                                reliability[c][decile][0] += 1;
-                                reliability[c][decile][1] += usize::from((d - t).abs() <= 5e-3);
+                                let tally = &mut reliability[network][c][decile];
+                                tally[0] += 1;
+                                tally[1] += usize::from((d - t).abs() <= 5e-3);
                             }
                         }
                     }
@@ -210,6 +236,7 @@ fn run(args: &Args) -> Result<(), String> {
             "plane sweep in the hull",
             "visual hull alone",
             "MVS (mvs_small)",
+            "refined sweep (sweep_refiner_small)",
         ];
         for (m, method) in methods.iter().enumerate() {
             if n < 2 && m > 0 {
@@ -224,18 +251,22 @@ fn run(args: &Args) -> Result<(), String> {
             }
         }
     }
-    println!("\nMVS confidence against error (object pixels of all views): the share within 5 mm");
-    println!("| input views | confidence | pixels | within 5 mm |");
-    println!("|---|---|---|---|");
-    for (c, &n) in counts.iter().enumerate() {
-        for (decile, [pixels, good]) in reliability[c].iter().enumerate() {
-            if *pixels > 0 {
-                println!(
-                    "| {n} | {:.1}-{:.1} | {pixels} | {:.0}% |",
-                    decile as f64 / 10.0,
-                    (decile + 1) as f64 / 10.0,
-                    100.0 * *good as f64 / *pixels as f64
-                );
+    for (network, name) in ["MVS", "refined sweep"].iter().enumerate() {
+        println!(
+            "\n{name}: confidence against error (object pixels of all views): the share within 5 mm"
+        );
+        println!("| input views | confidence | pixels | within 5 mm |");
+        println!("|---|---|---|---|");
+        for (c, &n) in counts.iter().enumerate() {
+            for (decile, [pixels, good]) in reliability[network][c].iter().enumerate() {
+                if *pixels > 0 {
+                    println!(
+                        "| {n} | {:.1}-{:.1} | {pixels} | {:.0}% |",
+                        decile as f64 / 10.0,
+                        (decile + 1) as f64 / 10.0,
+                        100.0 * *good as f64 / *pixels as f64
+                    );
+                }
             }
         }
     }

@@ -207,13 +207,16 @@ fn policies(args: &Args) -> Result<Vec<Policy>, String> {
                         Some(DepthFrom::Baseline)
                     } else if name.starts_with("mvs-") {
                         Some(DepthFrom::Mvs)
+                    } else if name.starts_with("refined-") {
+                        Some(DepthFrom::Refined)
                     } else {
                         None
                     };
                     let rest = name
                         .trim_start_matches("rgb-")
                         .trim_start_matches("lsm-")
-                        .trim_start_matches("mvs-");
+                        .trim_start_matches("mvs-")
+                        .trim_start_matches("refined-");
                     // topdown-N: the top-down GQ-CNN in the first (top-down) of N RGB views.
                     let top_down = rgb.is_some() && rest.starts_with("topdown-");
                     let views = rest
@@ -232,6 +235,9 @@ fn policies(args: &Args) -> Result<Vec<Policy>, String> {
                         label: match rgb {
                             Some(DepthFrom::Lsm) => format!("{kind}, {views} RGB views, LSM"),
                             Some(DepthFrom::Mvs) => format!("{kind}, {views} RGB views, MVS"),
+                            Some(DepthFrom::Refined) => {
+                                format!("{kind}, {views} RGB views, refined sweep")
+                            }
                             Some(DepthFrom::Baseline) => {
                                 format!("{kind}, {views} RGB views, baseline")
                             }

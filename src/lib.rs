@@ -25,6 +25,7 @@ pub mod planner;
 pub mod report;
 pub mod sensor_files;
 pub mod stereo;
+pub mod sweep_refiner;
 
 pub use error::{Error, ErrorKind, Result};
 pub use mvgrasp_geometry as geometry;

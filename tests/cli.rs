@@ -131,7 +131,7 @@ fn plan_json_on_depth_from_rgb_is_deterministic_and_carries_the_true_depth_run()
     for (args, says) in [
         (
             &["--depth-from", "stereo"][..],
-            "expected mvs, lsm or baseline, or rendered",
+            "expected baseline, refined, mvs or lsm, or rendered",
         ),
         (
             &["--depth-from", "lsm", "--views", "1"][..],

@@ -2,6 +2,7 @@
 
 /// The real meshes of the evaluations, paths under `../shared/data/meshes` (all in metres;
 /// the first two lie flat wider than the hand opens).
+#[allow(unused_imports)] // each example compiles this module; not every one takes these
 pub use mvgrasp::evaluate::objects::REAL_MESHES;
 /// The Wilson score interval at 95% confidence.
 #[allow(unused_imports)] // each example compiles this module; not every one takes these
@@ -56,4 +57,36 @@ pub fn analyse_at_rest(
         object,
         analysis,
     }))
+}
+
+/// Writes a little-endian float32 array of `shape` as a NumPy `.npy` file (format 1.0), to a
+/// temporary name first and then renamed, so that a killed run leaves no half file.
+#[allow(dead_code)] // each example compiles this module; not every one writes arrays
+pub fn write_npy_f32(
+    path: &std::path::Path,
+    shape: &[usize],
+    values: &[f32],
+) -> Result<(), String> {
+    let dims: Vec<String> = shape.iter().map(ToString::to_string).collect();
+    let trailing = if shape.len() == 1 { "," } else { "" };
+    let mut header = format!(
+        "{{'descr': '<f4', 'fortran_order': False, 'shape': ({}{trailing}), }}",
+        dims.join(", ")
+    );
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let length = u16::try_from(header.len()).map_err(|e| e.to_string())?;
+    let mut bytes = Vec::with_capacity(10 + header.len() + 4 * values.len());
+    bytes.extend_from_slice(b"\x93NUMPY\x01\x00");
+    bytes.extend_from_slice(&length.to_le_bytes());
+    bytes.extend_from_slice(header.as_bytes());
+    for v in values {
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    let partial = path.with_extension("npy.partial");
+    std::fs::write(&partial, bytes)
+        .map_err(|e| format!("cannot write {}: {e}", partial.display()))?;
+    std::fs::rename(&partial, path).map_err(|e| format!("cannot write {}: {e}", path.display()))
 }

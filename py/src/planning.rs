@@ -299,8 +299,9 @@ fn rgb_views(
 }
 
 /// Plans a grasp on RGB views, as `plan --rgb` does: the views' depth predicted by the
-/// plane-sweep baseline (`depth_from="baseline"`, the default), the shipped multi-view stereo
-/// network (`"mvs"`) or the shipped Learnt Stereo Machine (`"lsm"`), then the multi-view planner. `images`: per view an `(H, W, 3)` uint8 image;
+/// plane-sweep baseline (`depth_from="baseline"`, the default), the sweep refined by the
+/// shipped network (`"refined"`), the shipped multi-view stereo network (`"mvs"`) or the
+/// shipped Learnt Stereo Machine (`"lsm"`), then the multi-view planner. `images`: per view an `(H, W, 3)` uint8 image;
 /// `ks`, `world_from_cameras`: their cameras, posed in the table frame (z up, the table at
 /// z = 0); `masks`: per view the object's pixels or `None`. Returns `grasps.json`'s content
 /// (with `as_json`, its text).
@@ -333,8 +334,9 @@ pub(crate) fn plan_rgb<'py>(
 }
 
 /// Each RGB view's depth predicted from all of them (`depth_from="baseline"`, the default:
-/// silhouette carving and a plane sweep, `mvgrasp::stereo`; `"mvs"`: the shipped multi-view
-/// stereo network; `"lsm"`: the shipped Learnt Stereo Machine), as
+/// silhouette carving and a plane sweep, `mvgrasp::stereo`; `"refined"`: the sweep refined by
+/// the shipped network, `mvgrasp::sweep_refiner`; `"mvs"`: the shipped multi-view stereo
+/// network; `"lsm"`: the shipped Learnt Stereo Machine), as
 /// `plan --rgb` predicts it: a `(V, H, W)`
 /// float32 array, metres along each optical axis, 0 where unknown. The inputs are
 /// `plan_rgb`'s; the LSM also takes a single view (the baseline and the MVS network need two).

@@ -24,7 +24,7 @@ pub struct EvalPolicy {
 
 /// The policies the grasp suite knows: name, the `plan` command each stands for, and what it
 /// plans on.
-pub const POLICIES: [(&str, &str, &str); 8] = [
+pub const POLICIES: [(&str, &str, &str); 10] = [
     (
         "rgb",
         "plan",
@@ -65,6 +65,16 @@ pub const POLICIES: [(&str, &str, &str); 8] = [
         "plan --fuse --depth-from mvs",
         "the multi-view planner on its depth",
     ),
+    (
+        "refined",
+        "plan --depth-from refined",
+        "the plane sweep refined by its network",
+    ),
+    (
+        "refined-fused",
+        "plan --fuse --depth-from refined",
+        "the multi-view planner on the refined sweep's depth",
+    ),
 ];
 
 impl std::str::FromStr for EvalPolicy {
@@ -80,6 +90,7 @@ impl std::str::FromStr for EvalPolicy {
             "depth" => None,
             "lsm" => Some(DepthFrom::Lsm),
             "mvs" => Some(DepthFrom::Mvs),
+            "refined" => Some(DepthFrom::Refined),
             _ => {
                 let names: Vec<&str> = POLICIES.iter().map(|(n, ..)| *n).collect();
                 return Err(format!("{name:?}: expected one of {}", names.join(", ")));

@@ -22,6 +22,7 @@ use crate::planner::sensor::{mismatch, read_cameras_json, render_conventions};
 use crate::planner::{SensorPlanParams, ViewsPlanReport, plan_on_views};
 use crate::sensor_files::{read_mask_of, read_rgb};
 use crate::stereo::{RgbView, SweepParams, sweep_depths};
+use crate::sweep_refiner::RefinedSweep;
 
 /// Reads the RGB views of `dir` (see the module docs).
 ///
@@ -114,6 +115,9 @@ pub enum DepthFrom {
     Lsm,
     /// The classical baseline: silhouette carving and a plane sweep ([`crate::stereo`]).
     Baseline,
+    /// The plane sweep and its learned refinement, the shipped weights
+    /// ([`crate::sweep_refiner`]).
+    Refined,
 }
 
 impl std::str::FromStr for DepthFrom {
@@ -124,7 +128,8 @@ impl std::str::FromStr for DepthFrom {
             "mvs" => Ok(Self::Mvs),
             "lsm" => Ok(Self::Lsm),
             "baseline" => Ok(Self::Baseline),
-            other => Err(format!("{other:?}, expected mvs, lsm or baseline")),
+            "refined" => Ok(Self::Refined),
+            other => Err(format!("{other:?}, expected baseline, refined, mvs or lsm")),
         }
     }
 }
@@ -141,6 +146,7 @@ impl DepthFrom {
             Self::Mvs => "mvs",
             Self::Lsm => "lsm",
             Self::Baseline => "baseline",
+            Self::Refined => "refined",
         }
     }
 }
@@ -159,7 +165,13 @@ pub enum DepthPredictor {
         /// Pixels whose confidence is below this are left missing (0).
         min_confidence: f32,
     },
+    /// The plane sweep refined by a network.
+    Refined(RefinedSweep),
 }
+
+/// The shipped sweep refiner's confidence threshold where unseen space is allowed (the
+/// multi-view planner): an object pixel below it is left missing.
+pub const REFINED_MIN_CONFIDENCE: f32 = 0.5;
 
 /// The shipped multi-view stereo network's confidence threshold: pixels below it are left
 /// missing (unseen space for the planner). 0, every pixel kept: the shipped network's
@@ -183,6 +195,9 @@ impl PartialEq for DepthPredictor {
                     min_confidence: y,
                 },
             ) => Arc::ptr_eq(a, b) && x == y,
+            (Self::Refined(a), Self::Refined(b)) => {
+                Arc::ptr_eq(&a.net, &b.net) && a.min_confidence == b.min_confidence
+            }
             _ => false,
         }
     }
@@ -203,6 +218,10 @@ impl DepthPredictor {
             Self::Baseline(sweep) => Self::Baseline(SweepParams {
                 hull_where_unconfirmed: true,
                 ..sweep
+            }),
+            Self::Refined(refined) => Self::Refined(RefinedSweep {
+                min_confidence: 0.0,
+                ..refined
             }),
             other => other,
         }
@@ -229,6 +248,14 @@ impl DepthPredictor {
                 ),
                 min_confidence: MVS_MIN_CONFIDENCE,
             },
+            DepthFrom::Refined => Self::Refined(RefinedSweep {
+                net: Arc::new(
+                    models::SWEEP_REFINER
+                        .load()?
+                        .with_parallelism(Parallelism::all_threads()),
+                ),
+                min_confidence: REFINED_MIN_CONFIDENCE,
+            }),
         })
     }
 
@@ -238,6 +265,7 @@ impl DepthPredictor {
             Self::Baseline(_) => DepthFrom::Baseline,
             Self::Lsm(_) => DepthFrom::Lsm,
             Self::Mvs { .. } => DepthFrom::Mvs,
+            Self::Refined(_) => DepthFrom::Refined,
         }
     }
 
@@ -256,6 +284,11 @@ impl DepthPredictor {
                 net,
                 min_confidence,
             } => Ok(mvs_depths(net, views, *min_confidence)?
+                .into_iter()
+                .map(|view| view.depth_m)
+                .collect()),
+            Self::Refined(refined) => Ok(refined
+                .depths(views)?
                 .into_iter()
                 .map(|view| view.depth_m)
                 .collect()),

@@ -114,6 +114,11 @@ pub struct SweptDepth {
     pub depth_m: Vec<f32>,
     /// The visual hull's depth (the nearest plane inside every mask; 0 without masks).
     pub hull_m: Vec<f32>,
+    /// The cheapest plane's depth, refined, before `max_cost` and the consistency check (0
+    /// where no plane survived carving): what [`crate::sweep_refiner`] learns to trust or not.
+    pub winner_m: Vec<f32>,
+    /// That plane's cost (one minus the correlation, 0 to 2; 0 where `winner_m` is 0).
+    pub cost: Vec<f32>,
 }
 
 /// A cost that rules a plane out.
@@ -398,6 +403,8 @@ fn sweep_view(
     let rays = Rays::of(&reference.camera);
     let mut depth_m = vec![0.0f32; w * h];
     let mut hull_m = vec![0.0f32; w * h];
+    let mut winner_m = vec![0.0f32; w * h];
+    let mut cost_of = vec![0.0f32; w * h];
     if let (true, Some(mask)) = (params.table, &reference.mask) {
         for (i, d) in depth_m.iter_mut().enumerate() {
             if !mask[i] {
@@ -406,7 +413,12 @@ fn sweep_view(
         }
     }
     let Some((bu0, bv0, bu1, bv1)) = sweep_box(reference, params.window_radius) else {
-        return SweptDepth { depth_m, hull_m };
+        return SweptDepth {
+            depth_m,
+            hull_m,
+            winner_m,
+            cost: cost_of,
+        };
     };
     let (bw, bh) = (bu1 - bu0, bv1 - bv0);
     let is_object = |i: usize| reference.mask.as_ref().is_none_or(|m| m[i]);
@@ -446,7 +458,12 @@ fn sweep_view(
         far = far.min(depth + params.reach_m);
     }
     if !(near.is_finite() && far > near) {
-        return SweptDepth { depth_m, hull_m };
+        return SweptDepth {
+            depth_m,
+            hull_m,
+            winner_m,
+            cost: cost_of,
+        };
     }
     let targets: Vec<Target<'_>> = views
         .iter()
@@ -467,7 +484,12 @@ fn sweep_view(
             .filter(|&p| plane_meets_hull(reference, &rays, &targets, coarse[p], sweep_box))
             .collect();
         let (Some(&first), Some(&last)) = (inside.first(), inside.last()) else {
-            return SweptDepth { depth_m, hull_m };
+            return SweptDepth {
+                depth_m,
+                hull_m,
+                winner_m,
+                cost: cost_of,
+            };
         };
         // Two coarse planes of margin: a ray may cross a sliver of the hull between two.
         near = coarse[first.saturating_sub(2)];
@@ -531,13 +553,23 @@ fn sweep_view(
                 hull_m[image] = planes[hull[i]];
             }
             let (cost, plane, left, right) = best[i];
-            if plane == usize::MAX || cost > params.max_cost {
+            if plane == usize::MAX {
                 continue;
             }
-            depth_m[image] = refine(&planes, plane, cost, left, right);
+            let refined = refine(&planes, plane, cost, left, right);
+            winner_m[image] = refined;
+            cost_of[image] = cost;
+            if cost <= params.max_cost {
+                depth_m[image] = refined;
+            }
         }
     }
-    SweptDepth { depth_m, hull_m }
+    SweptDepth {
+        depth_m,
+        hull_m,
+        winner_m,
+        cost: cost_of,
+    }
 }
 
 /// Planes before the sweep that find the depths the visual hull spans.
@@ -768,7 +800,7 @@ fn window_sums(
 }
 
 #[cfg(test)]
-mod tests_support {
+pub(crate) mod tests_support {
     #![allow(clippy::unwrap_used, clippy::expect_used)] // tests may fail loudly
 
     use super::*;
@@ -810,7 +842,7 @@ mod tests_support {
         out
     }
 
-    pub(super) fn views(count: usize) -> (Vec<RgbView>, Vec<Vec<f32>>) {
+    pub(crate) fn views(count: usize) -> (Vec<RgbView>, Vec<Vec<f32>>) {
         views_at(count, 0.5)
     }
 

@@ -45,6 +45,9 @@ __all__ = [
     "MvsDataConfig",
     "MvsExperimentConfig",
     "MvsModelConfig",
+    "SweepRefinerDataConfig",
+    "SweepRefinerExperimentConfig",
+    "SweepRefinerModelConfig",
     "TrainConfig",
     "load_config",
     "parse_config",
@@ -292,6 +295,42 @@ class MvsExperimentConfig(_Validated):
     model: MvsModelConfig = field(default_factory=MvsModelConfig)
 
 
+@dataclass(frozen=True)
+class SweepRefinerDataConfig(_Validated):
+    """The sweep refiner's samples (``examples/sweep_refiner_data.rs`` output) and crops."""
+
+    dataset_dir: Path
+    """A ``sweep_refiner_data`` output folder; relative to the config file's folder."""
+    val_fraction: float = _checked(_FRACTION, default=0.1)
+    """The fraction of samples (rigs, with all their views) held out for validation."""
+    crop: int = _checked((lambda v: v >= 16, ">= 16"), default=96)
+    """Training crops' side, pixels."""
+    colour_jitter: float = _checked(_FRACTION, default=0.1)
+    """Per crop: gains and offsets of each colour channel drawn within this fraction."""
+
+
+@dataclass(frozen=True)
+class SweepRefinerModelConfig(_Validated):
+    """The architecture's sizes (see :class:`SweepRefinerArchitecture`)."""
+
+    channels: int = _checked(_AT_LEAST_ONE, default=16)
+    dilations: tuple[int, ...] = (1, 2, 4, 8, 16, 1)
+    step_m: float = _checked(_POSITIVE, default=0.01)
+    tolerance_m: float = _checked(_POSITIVE, default=0.003)
+    """The confidence learns whether the refined depth is within this of the truth."""
+
+
+@dataclass(frozen=True)
+class SweepRefinerExperimentConfig(_Validated):
+    """One training run of the sweep refiner (the LSM's schedule keys)."""
+
+    name: str = _checked(_NOT_EMPTY)
+    seed: int = _checked(_NON_NEGATIVE)
+    data: SweepRefinerDataConfig
+    train: LsmTrainConfig
+    model: SweepRefinerModelConfig = field(default_factory=SweepRefinerModelConfig)
+
+
 def load_config(path: str | Path, cls: type[T] = ExperimentConfig) -> T:  # type: ignore[assignment]
     """Reads a TOML file as a ``cls`` (an :class:`ExperimentConfig` unless told otherwise).
 
@@ -388,6 +427,13 @@ def _convert(hint: Any, raw: Any, source: str, key: str, base_dir: Path | None) 
         if not isinstance(raw, str):
             raise ConfigError(source, key, f"expected a string, got {_describe(raw)}")
         return raw
+    if typing.get_origin(hint) is tuple:
+        (item, rest) = typing.get_args(hint)
+        if rest is not Ellipsis or item is not int:
+            raise TypeError(f"config field {key} has unsupported type {hint!r}")
+        if not isinstance(raw, (list, tuple)) or not raw:
+            raise ConfigError(source, key, f"expected a non-empty list, got {_describe(raw)}")
+        return tuple(_convert(int, v, source, f"{key}[{i}]", base_dir) for i, v in enumerate(raw))
     if hint is Path:
         if not isinstance(raw, (str, Path)):
             raise ConfigError(source, key, f"expected a path string, got {_describe(raw)}")

@@ -17,6 +17,7 @@ from mvgrasp_training._files import read_format_json, write_text_atomically
 from mvgrasp_training.gqcnn import GQCNN
 from mvgrasp_training.lsm import LSM, LsmArchitecture
 from mvgrasp_training.mvs import MVS, MvsArchitecture
+from mvgrasp_training.sweep_refiner import SweepRefiner, SweepRefinerArchitecture
 
 FORMAT = "mvgrasp-gqcnn/1"
 
@@ -98,10 +99,11 @@ def load_gqcnn(path: str | Path) -> tuple[GQCNN, dict[str, Any]]:
 
 LSM_FORMAT = "mvgrasp-lsm/1"
 MVS_FORMAT = "mvgrasp-mvs/1"
+SWEEP_REFINER_FORMAT = "mvgrasp-sweep-refiner/1"
 
 
 def _export_depth_network(
-    net: LSM | MVS, stem: str | Path, format_tag: str, training: dict[str, Any] | None
+    net: LSM | MVS | SweepRefiner, stem: str | Path, format_tag: str, training: dict[str, Any] | None
 ) -> Path:
     """Writes a depth network's ``stem.safetensors`` (its state dict, float32) and
     ``stem.json`` (format, architecture, tensor shapes, what the caller records about
@@ -169,3 +171,27 @@ def load_mvs(path: str | Path) -> tuple[MVS, dict[str, Any]]:
         ValueError: the JSON is not such an export, or its weights do not fit the architecture.
     """
     return _load_depth_network(path, MVS_FORMAT, lambda arch: MVS(MvsArchitecture(**arch)))
+
+
+def export_sweep_refiner(
+    net: SweepRefiner, stem: str | Path, training: dict[str, Any] | None = None
+) -> Path:
+    """Writes the sweep refiner's ``stem.safetensors`` and ``stem.json`` for the Rust runtime
+    (``mvgrasp_infer::SweepRefiner``); returns the JSON's path."""
+    return _export_depth_network(net, stem, SWEEP_REFINER_FORMAT, training)
+
+
+def load_sweep_refiner(path: str | Path) -> tuple[SweepRefiner, dict[str, Any]]:
+    """Reads a sweep refiner export back into torch: the network (eval mode) and its
+    description.
+
+    Raises:
+        ValueError: the JSON is not such an export, or its weights do not fit the architecture.
+    """
+
+    def build(arch: dict[str, Any]) -> SweepRefiner:
+        return SweepRefiner(
+            SweepRefinerArchitecture(**{**arch, "dilations": tuple(arch["dilations"])})
+        )
+
+    return _load_depth_network(path, SWEEP_REFINER_FORMAT, build)

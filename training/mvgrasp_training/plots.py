@@ -43,10 +43,23 @@ def plot_history(history: list[dict[str, Any]], path: str | Path, title: str = "
     return path
 
 
-def plot_lsm_history(history: list[dict[str, Any]], path: str | Path, title: str = "") -> Path:
-    """Writes a depth network's curve to ``path`` (a PNG): the training L1 (where the history
-    has it) and the validation mean absolute depth error over the held-out objects' pixels and
-    over all pixels in range, millimetres per epoch; returns the path."""
+_DEPTH_SERIES = (
+    ("train_l1_mm", "training L1 (all pixels in range)"),
+    ("object_mm", "validation MAE, object pixels"),
+    ("all_mm", "validation MAE, all pixels in range"),
+)
+
+
+def plot_lsm_history(
+    history: list[dict[str, Any]],
+    path: str | Path,
+    title: str = "",
+    series: tuple[tuple[str, str], ...] = _DEPTH_SERIES,
+) -> Path:
+    """Writes a depth network's curve to ``path`` (a PNG): by default the training L1 (where
+    the history has it) and the validation mean absolute depth error over the held-out objects'
+    pixels and over all pixels in range, millimetres per epoch (``series``: other keys of the
+    history, with their labels); returns the path."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -54,11 +67,7 @@ def plot_lsm_history(history: list[dict[str, Any]], path: str | Path, title: str
 
     epochs = [h["epoch"] for h in history]
     fig, ax = plt.subplots(figsize=(7, 4), dpi=100)
-    for key, label in (
-        ("train_l1_mm", "training L1 (all pixels in range)"),
-        ("object_mm", "validation MAE, object pixels"),
-        ("all_mm", "validation MAE, all pixels in range"),
-    ):
+    for key, label in series:
         # A run that records no such figure (the MVS network's training loss is not a depth
         # error) draws no line for it.
         if any(key in h for h in history):

@@ -118,6 +118,31 @@ def dataset_record(root: Path) -> dict[str, Any]:
     }
 
 
+def depth_training_report(
+    config: Any, history: list[dict[str, Any]], epoch: int, keep=lambda key: True
+) -> dict[str, Any]:
+    """What a depth network's export records about its training: the config (its dataset as
+    :func:`dataset_record` names it), the dataset, the code's commit, torch's version, the
+    selected ``epoch`` and its validation figures (the history's keys that ``keep`` accepts,
+    never the epoch or its seconds), the whole history and the date."""
+    dataset = dataset_record(config.data.dataset_dir)
+    recorded_config = json.loads(json.dumps(asdict(config), default=str))
+    recorded_config["data"]["dataset_dir"] = dataset["path"]
+    selected = next(record for record in history if record["epoch"] == epoch)
+    return {
+        "config": recorded_config,
+        "dataset": dataset,
+        "code_commit": code_commit(),
+        "torch": torch.__version__,
+        "selected_epoch": epoch,
+        "val": {
+            k: v for k, v in selected.items() if k not in ("epoch", "seconds") and keep(k)
+        },
+        "history": history,
+        "date": time.strftime("%Y-%m-%d"),
+    }
+
+
 def code_commit() -> str:
     """The repository's commit (with ``-dirty`` when the tree has changes), or ``unknown``."""
 

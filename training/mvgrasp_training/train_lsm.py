@@ -46,7 +46,7 @@ from mvgrasp_training.config import LsmExperimentConfig, load_config
 from mvgrasp_training.export import export_lsm
 from mvgrasp_training.lsm import LSM, LsmArchitecture, grid_centre, ray_depths, scale_intrinsics
 from mvgrasp_training.plots import plot_lsm_history
-from mvgrasp_training.train import code_commit, dataset_record, distributed_world
+from mvgrasp_training.train import depth_training_report, distributed_world
 
 
 @dataclass
@@ -157,20 +157,7 @@ def export_best(config: LsmExperimentConfig, out: Path, stem: Path) -> Path:
     history = json.loads((out / "history.json").read_text())
     net = LSM(LsmArchitecture(**best["arch"]))
     net.load_state_dict(best["model"])
-    dataset = dataset_record(config.data.dataset_dir)
-    recorded_config = json.loads(json.dumps(asdict(config), default=str))
-    recorded_config["data"]["dataset_dir"] = dataset["path"]
-    selected = next(record for record in history if record["epoch"] == best["epoch"])
-    report = {
-        "config": recorded_config,
-        "dataset": dataset,
-        "code_commit": code_commit(),
-        "torch": torch.__version__,
-        "selected_epoch": best["epoch"],
-        "val": {k: v for k, v in selected.items() if k.endswith("_mm")},
-        "history": history,
-        "date": time.strftime("%Y-%m-%d"),
-    }
+    report = depth_training_report(config, history, best["epoch"], keep=lambda k: k.endswith("_mm"))
     plot_lsm_history(history, out / "learning_curve.png", title=config.name)
     return export_lsm(net, stem, report)
 

@@ -45,7 +45,7 @@ from mvgrasp_training.export import export_mvs
 from mvgrasp_training.lsm import grid_centre, scale_intrinsics
 from mvgrasp_training.mvs import MVS, MvsArchitecture, MvsOutput, depth_range
 from mvgrasp_training.plots import plot_lsm_history
-from mvgrasp_training.train import code_commit, dataset_record
+from mvgrasp_training.train import depth_training_report
 from mvgrasp_training.train_lsm import batch, load_dataset
 
 # The loss weights of the coarse, fine and refined depths.
@@ -278,20 +278,7 @@ def export_best(config: MvsExperimentConfig, out: Path, stem: Path) -> Path:
     history = json.loads((out / "history.json").read_text())
     net = MVS(MvsArchitecture(**best["arch"]))
     net.load_state_dict(best["model"])
-    dataset = dataset_record(config.data.dataset_dir)
-    recorded_config = json.loads(json.dumps(asdict(config), default=str))
-    recorded_config["data"]["dataset_dir"] = dataset["path"]
-    selected = next(record for record in history if record["epoch"] == best["epoch"])
-    report = {
-        "config": recorded_config,
-        "dataset": dataset,
-        "code_commit": code_commit(),
-        "torch": torch.__version__,
-        "selected_epoch": best["epoch"],
-        "val": {k: v for k, v in selected.items() if k != "epoch" and k != "seconds"},
-        "history": history,
-        "date": time.strftime("%Y-%m-%d"),
-    }
+    report = depth_training_report(config, history, best["epoch"])
     plot_lsm_history(history, out / "learning_curve.png", title=config.name)
     return export_mvs(net, stem, report)
 

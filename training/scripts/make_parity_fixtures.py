@@ -23,7 +23,13 @@
    outputs of its geometry (the workspace's depth range, the hypotheses, one correlation
    volume). Computed in float64, stored as float32.
 
-``--only mvs`` writes the fourth part alone (the others stay as they are).
+5. crates/infer/tests/fixtures/: for a tiny sweep refiner (3 dilated layers of 4 channels,
+   seeded random weights) sweep_refiner_tiny.json + .safetensors and
+   sweep_refiner_tiny.io.safetensors: random features and torch's correction and confidence,
+   computed in float64, stored as float32.
+
+``--only mvs`` / ``--only sweep_refiner`` writes the fourth / fifth part alone (the others stay
+as they are).
 """
 
 from __future__ import annotations
@@ -286,12 +292,39 @@ def mvs_fixtures() -> None:
     print(f"wrote mvs_tiny: depth {out.depth.min().item():.4f}..{out.depth.max().item():.4f} m")
 
 
+def sweep_refiner_fixtures() -> None:
+    from mvgrasp_training.export import export_sweep_refiner
+    from mvgrasp_training.sweep_refiner import SweepRefiner, SweepRefinerArchitecture
+
+    torch.manual_seed(13)
+    gen = torch.Generator().manual_seed(13)
+    arch = SweepRefinerArchitecture(channels=4, dilations=(1, 2, 4), step_m=0.01)
+    net = SweepRefiner(arch)
+    export_sweep_refiner(net, OUT / "sweep_refiner_tiny", {"purpose": "parity fixture, random weights"})
+    features = torch.randn(1, arch.inputs, 13, 17, generator=gen, dtype=torch.float64)
+    with torch.no_grad():
+        correction, logit = net.double()(features)
+    save_file(
+        {
+            "features": features.float().contiguous(),
+            "correction_m": correction[0].float().contiguous(),
+            "confidence": torch.sigmoid(logit[0]).float().contiguous(),
+        },
+        str(OUT / "sweep_refiner_tiny.io.safetensors"),
+    )
+    print(f"wrote sweep_refiner_tiny: correction {correction.abs().max().item():.4f} m at most")
+
+
 def main() -> None:
     import sys
 
     if sys.argv[1:] == ["--only", "mvs"]:
         mvs_fixtures()
         return
+    if sys.argv[1:] == ["--only", "sweep_refiner"]:
+        sweep_refiner_fixtures()
+        return
+    sweep_refiner_fixtures()
     mvs_fixtures()
     lsm_fixtures()
     OUT.mkdir(parents=True, exist_ok=True)

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Reproduces the shipped networks of models/ from a clean clone: the grasp and RGB-D datasets
-# they were trained on (training/configs/datasets/, `render`), the four training runs
+# they were trained on (training/configs/datasets/, `render`), the five training runs
 # (training/configs/), the exports copied into models/ and the torch-parity fixtures of the
 # Rust tests rewritten, then the fused planner's ranker (training/scripts/fit_ranker.py).
 #
@@ -113,6 +113,13 @@ sed "${edits[@]}" training/configs/mvs_small.toml > "$config"
     --export "$runs/mvs_small/mvs_small" > "$runs/mvs_small.log" 2>&1 \
     || { echo "training mvs_small failed: see $runs/mvs_small.log" >&2; exit 1; }
 
+# The plane sweep's learned refinement: its own samples (sweeps of random camera rigs) and
+# run, by its script (about 25 minutes of samples and 30 of training here on its own; its data
+# and run go to ../datasets and ../runs, the same folders as here, or a scratch folder of its
+# own with QUICK=1).
+QUICK=$quick training/scripts/sweep_refiner.sh > "$runs/sweep_refiner_small.log" 2>&1 \
+    || { echo "training sweep_refiner_small failed: see $runs/sweep_refiner_small.log" >&2; exit 1; }
+
 ranker_out=$runs/ranker_fused.json
 if [[ $quick != 1 ]]; then
     for name in gqcnn_small_topdown gqcnn_small_multiview; do
@@ -123,6 +130,9 @@ if [[ $quick != 1 ]]; then
     cp "$runs/lsm_small/learning_curve.png" models/lsm_small.png
     cp "$runs/mvs_small/mvs_small.json" "$runs/mvs_small/mvs_small.safetensors" models/
     cp "$runs/mvs_small/learning_curve.png" models/mvs_small.png
+    cp "$runs/sweep_refiner_small/sweep_refiner_small.json" \
+        "$runs/sweep_refiner_small/sweep_refiner_small.safetensors" models/
+    cp "$runs/sweep_refiner_small/learning_curve.png" models/sweep_refiner_small.png
     "$python" training/scripts/make_parity_fixtures.py
     ranker_out=models/ranker_fused.json
 fi

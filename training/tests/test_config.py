@@ -13,6 +13,7 @@ from mvgrasp_training.config import (
     ExperimentConfig,
     LsmExperimentConfig,
     MvsExperimentConfig,
+    SweepRefinerExperimentConfig,
     TrainConfig,
     load_config,
 )
@@ -62,8 +63,13 @@ def test_example_loads() -> None:
 
 @pytest.mark.parametrize("path", sorted(CONFIGS.glob("*.toml")), ids=lambda p: p.name)
 def test_every_shipped_config_loads(path: Path) -> None:
-    # The depth networks' configs (lsm_*.toml, mvs_*.toml) are of their own kinds.
-    kinds = {"lsm_": LsmExperimentConfig, "mvs_": MvsExperimentConfig}
+    # The depth networks' configs (lsm_*.toml, mvs_*.toml, sweep_refiner_*.toml) are of their
+    # own kinds.
+    kinds = {
+        "lsm_": LsmExperimentConfig,
+        "mvs_": MvsExperimentConfig,
+        "sweep_refiner_": SweepRefinerExperimentConfig,
+    }
     kind = next(
         (k for prefix, k in kinds.items() if path.name.startswith(prefix)), ExperimentConfig
     )

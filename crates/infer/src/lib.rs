@@ -10,6 +10,6 @@ pub mod tensor;
 mod testing;
 
 pub use error::{InferError, Result};
-pub use model::{Gqcnn, GqcnnWorkspace, Lsm, Mvs, MvsDepth};
+pub use model::{Gqcnn, GqcnnWorkspace, Lsm, Mvs, MvsDepth, SweepRefiner};
 pub use parallel::Parallelism;
 pub use tensor::Tensor;

@@ -8,3 +8,4 @@ mod gqcnn_parity;
 mod gqcnn_shaped_forward;
 mod lsm_parity;
 mod mvs_parity;
+mod sweep_refiner_parity;

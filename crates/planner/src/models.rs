@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use mvgrasp_infer::{Gqcnn, Lsm, Mvs};
+use mvgrasp_infer::{Gqcnn, Lsm, Mvs, SweepRefiner};
 
 use crate::error::Result;
 
@@ -138,4 +138,37 @@ pub const MVS: ShippedMvs = ShippedMvs {
     name: "mvs_small",
     description: include_str!("../../../models/mvs_small.json"),
     weights: include_bytes!("../../../models/mvs_small.safetensors"),
+};
+
+/// A shipped sweep refiner: its name and files.
+#[derive(Clone, Copy, Debug)]
+pub struct ShippedSweepRefiner {
+    /// The experiment's name (`training/configs/NAME.toml`).
+    pub name: &'static str,
+    description: &'static str,
+    weights: &'static [u8],
+}
+
+impl ShippedSweepRefiner {
+    /// The network, ready to refine a plane sweep's depth.
+    ///
+    /// # Errors
+    /// Only if the shipped files are broken (a test loads them).
+    pub fn load(&self) -> Result<SweepRefiner> {
+        let path = Path::new("models").join(format!("{}.json", self.name));
+        Ok(SweepRefiner::from_bytes(
+            self.description,
+            self.weights,
+            &path,
+        )?)
+    }
+}
+
+/// The plane sweep's learned refinement trained on built-in objects seen by random camera
+/// rigs (`training/configs/sweep_refiner_small.toml`): a correction and a confidence per
+/// pixel of the sweep's depth.
+pub const SWEEP_REFINER: ShippedSweepRefiner = ShippedSweepRefiner {
+    name: "sweep_refiner_small",
+    description: include_str!("../../../models/sweep_refiner_small.json"),
+    weights: include_bytes!("../../../models/sweep_refiner_small.safetensors"),
 };

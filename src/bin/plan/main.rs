@@ -8,7 +8,7 @@
 //! writes `grasps.json`, the overlays, the MCAP log and `views.png` (the colour views above
 //! their predicted depth, the best grasps drawn in every view). `--depth-from rendered` plans
 //! on a depth camera's view instead (one top-down view 0.7 m away), `--fuse` with the
-//! multi-view planner, `--depth-from mvs|lsm|baseline` with another predictor.
+//! multi-view planner, `--depth-from refined|mvs|lsm|baseline` with another predictor.
 //!
 //! `--depth FILE --intrinsics FILE [--camera-pose FILE] [--mask FILE]` plans on a sensor's
 //! depth image instead: the table is fitted in the image (the world is put on it when the
@@ -114,8 +114,9 @@ struct Args {
     rgb: Option<PathBuf>,
     /// How the depth planned on is made from RGB views (at least 2): `baseline`, the classical
     /// plane sweep inside the masks' visual hull (the default: its depth gave the grasps that
-    /// held most often); `mvs`, the shipped multi-view stereo network; `lsm`, the shipped Learnt
-    /// Stereo Machine; or, for a built-in object or a mesh, `rendered` (true depth, a depth
+    /// held most often); `refined`, the plane sweep refined by the shipped network (a correction
+    /// and a confidence per pixel); `mvs`, the shipped multi-view stereo network; `lsm`, the
+    /// shipped Learnt Stereo Machine; or, for a built-in object or a mesh, `rendered` (true depth, a depth
     /// camera). On a mesh the views are rendered in colour (random colours), their depth
     /// predicted, the top-down GQ-CNN plans in the top-down one (`--fuse`: the multi-view
     /// planner in all), and the summary also gives the same run on the rendered depth.

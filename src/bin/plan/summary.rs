@@ -11,6 +11,7 @@ pub(crate) fn depth_from_words(from: DepthFrom) -> &'static str {
         DepthFrom::Mvs => "the multi-view stereo network (models/mvs_small)",
         DepthFrom::Lsm => "the Learnt Stereo Machine (models/lsm_small)",
         DepthFrom::Baseline => "the plane-sweep baseline",
+        DepthFrom::Refined => "the plane sweep refined by its network (models/sweep_refiner_small)",
     }
 }
 

@@ -5,6 +5,7 @@ pub mod gqcnn;
 mod image_stream;
 pub mod lsm;
 pub mod mvs;
+pub mod sweep_refiner;
 pub mod weights;
 
 pub use description::{
@@ -13,4 +14,8 @@ pub use description::{
 pub use gqcnn::{Gqcnn, GqcnnWorkspace};
 pub use lsm::{LSM_FORMAT, Lsm, LsmArchitecture, LsmDescription};
 pub use mvs::{MVS_FORMAT, Mvs, MvsArchitecture, MvsDepth, MvsDescription};
+pub use sweep_refiner::{
+    RefinedSweep, SWEEP_REFINER_FORMAT, SweepRefiner, SweepRefinerArchitecture,
+    SweepRefinerDescription,
+};
 pub use weights::Weights;
