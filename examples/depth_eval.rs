@@ -107,6 +107,7 @@ fn run(args: &Args) -> Result<(), String> {
                 .with_parallelism(Parallelism::all_threads()),
         ),
         min_confidence: 0.0,
+        unsure: mvgrasp::sweep_refiner::Unsure::Missing,
     };
     let counts = &args.views;
     if let Some(n) = counts.iter().find(|n| !(1..=10).contains(*n)) {

@@ -12,7 +12,8 @@
 //! correction to the base depth and a confidence: it learns which unconfirmed winners to
 //! believe, where the hull is a fair guess and how the confirmed surface around a hole
 //! continues. Pixels off the object keep the sweep's table plane; below `min_confidence` an
-//! object pixel is left missing (unseen space to the multi-view planner).
+//! object pixel is left missing (unseen space to the multi-view planner) or, for a network that
+//! plans in one view, takes the visual hull's depth ([`Unsure`]).
 
 use std::sync::Arc;
 
@@ -170,13 +171,26 @@ pub struct RefinedView {
     pub confidence: Vec<f32>,
 }
 
+/// What an object pixel below the confidence threshold gets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Unsure {
+    /// Nothing (0): unseen space, for the multi-view planner.
+    Missing,
+    /// The visual hull's depth (never beyond the surface, so the hand keeps clear of it), or
+    /// nothing where the hull does not reach: for a network planning in one view, which needs
+    /// every pixel.
+    Hull,
+}
+
 /// The sweep and its refinement, as a depth predictor holds them.
 #[derive(Clone, Debug)]
 pub struct RefinedSweep {
     /// The network.
     pub net: Arc<SweepRefiner>,
-    /// An object pixel whose confidence is below this is left missing (0 keeps all).
+    /// An object pixel whose confidence is below this is `unsure` (0 keeps all).
     pub min_confidence: f32,
+    /// What a pixel below `min_confidence` gets.
+    pub unsure: Unsure,
 }
 
 impl RefinedSweep {
@@ -239,6 +253,8 @@ impl RefinedSweep {
             confidence[at] = c;
             if c >= self.min_confidence {
                 depth_m[at] = (base + correction).max(0.0);
+            } else if self.unsure == Unsure::Hull {
+                depth_m[at] = swept.hull_m[at];
             }
         }
         Ok(RefinedView {
@@ -307,12 +323,21 @@ mod tests {
         let all = RefinedSweep {
             net: Arc::clone(&net),
             min_confidence: 0.0,
+            unsure: Unsure::Missing,
         }
         .depths(&rgb)
         .unwrap();
         let none = RefinedSweep {
+            net: Arc::clone(&net),
+            min_confidence: 1.5,
+            unsure: Unsure::Missing,
+        }
+        .depths(&rgb)
+        .unwrap();
+        let hull = RefinedSweep {
             net,
             min_confidence: 1.5,
+            unsure: Unsure::Hull,
         }
         .depths(&rgb)
         .unwrap();
