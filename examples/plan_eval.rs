@@ -20,7 +20,10 @@
 //! - `fused-3`, `fused-5`, `fused-10`: the multi-view planner: 3, 5 or 10 views on the
 //!   hemisphere (the first top-down) fused, every candidate checked against the fused model
 //!   (the open hand must stay out of space no view saw), the best re-scored on virtual views
-//!   along their approach axes (`--rescore`).
+//!   along their approach axes (`--rescore`);
+//! - `rgb-`, `refined-`, `mvs-` or `lsm-` before `topdown-N` or `fused-N`: the same on the
+//!   depth of N colour views predicted by the plane sweep, the refined sweep, the multi-view
+//!   stereo network or the Learnt Stereo Machine.
 
 mod common;
 
@@ -226,8 +229,9 @@ fn policies(args: &Args) -> Result<Vec<Policy>, String> {
                         .ok_or_else(|| {
                             format!(
                                 "--policy {name}: expected topdown, per-view, fused-N, \
-                                 lsm-fused-N, rgb-fused-N, mvs-fused-N, lsm-topdown-N, \
-                                 rgb-topdown-N or mvs-topdown-N (N views)"
+                                 lsm-fused-N, rgb-fused-N, mvs-fused-N, refined-fused-N, \
+                                 lsm-topdown-N, rgb-topdown-N, mvs-topdown-N or \
+                                 refined-topdown-N (N views)"
                             )
                         })?;
                     let kind = if top_down { "top-down GQ-CNN" } else { "fused" };

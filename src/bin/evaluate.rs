@@ -50,7 +50,8 @@ struct Args {
     #[arg(long)]
     max_meshes: Option<usize>,
     /// A policy (repeat): rgb (the default run), depth (the same on rendered depth),
-    /// rgb-fused, depth-fused, lsm, lsm-fused, mvs, mvs-fused. Default: rgb and depth.
+    /// rgb-fused, depth-fused, lsm, lsm-fused, mvs, mvs-fused, refined, refined-fused.
+    /// Default: rgb and depth.
     #[arg(long = "policy")]
     policies: Vec<String>,
     /// The plans' seeds (default 0; --full: 0,1,2).
