@@ -343,16 +343,17 @@ mod tests {
         .unwrap();
         let swept = sweep_depths(&rgb, &RefinedSweep::sweep_params()).unwrap();
         let mut errors = Vec::new();
-        for (((view, truth), (all, none)), swept) in rgb
+        for (((view, truth), (all, none)), (swept, hull)) in rgb
             .iter()
             .zip(&truth)
             .zip(all.iter().zip(&none))
-            .zip(&swept)
+            .zip(swept.iter().zip(&hull))
         {
             let mask = view.mask.as_ref().unwrap();
             for (i, &on) in mask.iter().enumerate() {
                 if on {
                     assert_eq!(none.depth_m[i], 0.0);
+                    assert_eq!(hull.depth_m[i], swept.hull_m[i]);
                     if all.depth_m[i] > 0.0 {
                         errors.push((all.depth_m[i] - truth[i]).abs());
                     }
