@@ -195,9 +195,12 @@ fn run(args: &Args) -> Result<(), String> {
                         stereo.get(i).map(|p| (3, &p.depth_m, &p.confidence)),
                         sharpened.get(i).map(|p| (4, &p.depth_m, &p.confidence)),
                     ];
-                    for (network, (m, depth, confidence)) in
-                        confident.into_iter().flatten().enumerate()
-                    {
+                    // The reliability table's index: 0 the MVS network, 1 the refined sweep.
+                    let confident = confident
+                        .into_iter()
+                        .enumerate()
+                        .filter_map(|(network, p)| Some((network, p?)));
+                    for (network, (m, depth, confidence)) in confident {
                         methods.push((m, depth));
                         let pixels = depth.iter().zip(confidence);
                         for (((&d, &confidence), &t), &on) in pixels.zip(truth).zip(mask) {

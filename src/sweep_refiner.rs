@@ -66,16 +66,20 @@ pub struct ViewFeatures {
     pub base_m: Vec<f32>,
 }
 
+/// Whether pixel `i` is the object's: its mask's, or without a mask where the sweep found a winner.
+fn is_object(view: &RgbView, swept: &SweptDepth, i: usize) -> bool {
+    view.mask
+        .as_ref()
+        .map_or(swept.winner_m[i] > 0.0, |mask| mask[i])
+}
+
 /// The features of one view from its sweep (run with the consistency check and without
 /// `hull_where_unconfirmed`, as [`RefinedSweep`] runs it); `None` when the view has no object
 /// pixel (a mask) or no winner anywhere (no mask).
 pub fn view_features(view: &RgbView, swept: &SweptDepth) -> Option<ViewFeatures> {
     let k = &view.camera.intrinsics;
     let (w, h) = (k.width as usize, k.height as usize);
-    let object = |i: usize| match &view.mask {
-        Some(mask) => mask[i],
-        None => swept.winner_m[i] > 0.0,
-    };
+    let object = |i: usize| is_object(view, swept, i);
     let (mut u0, mut v0, mut u1, mut v1) = (usize::MAX, usize::MAX, 0, 0);
     for v in 0..h {
         for u in 0..w {
@@ -225,8 +229,7 @@ impl RefinedSweep {
     fn refine(&self, view: &RgbView, swept: &SweptDepth) -> Result<RefinedView> {
         let k = &view.camera.intrinsics;
         let w = k.width as usize;
-        // Without a mask the object is where the sweep found a winner (as for the features).
-        let object = |i: usize| view.mask.as_ref().map_or(swept.winner_m[i] > 0.0, |m| m[i]);
+        let object = |i: usize| is_object(view, swept, i);
         let mut depth_m: Vec<f32> = swept
             .depth_m
             .iter()
