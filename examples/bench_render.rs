@@ -19,7 +19,7 @@ use std::time::Instant;
 
 use clap::Parser;
 use mvgrasp_geometry::{Camera, HemisphereLayout, Intrinsics, TriangleMesh, Vec3};
-use mvgrasp_render::{Backend, Colors, IDENTITY, MeshInput, Renderer, View};
+use mvgrasp_render::{Backend, Colors, IDENTITY, Material, MeshInput, Renderer, View};
 
 mod common;
 
@@ -92,6 +92,7 @@ fn run(args: &Args) -> Result<(), String> {
             colors: Colors::PerFace(&colors),
             world_from_mesh: IDENTITY,
             instance_id: 1,
+            material: Material::MATTE,
         }])
         .map_err(|e| e.to_string())?;
     let upload_ms = ms_since(started);

@@ -6,8 +6,12 @@
 //!
 //! ```text
 //! cargo run --release --example depth_eval -- [--per-category 3] [--per-face] [--distance-m 0.5]
-//!     [--views 3,5,9] [--sweep-hull]
+//!     [--views 3,5,9] [--sweep-hull] [--photo]
 //! ```
+//!
+//! `--photo` renders the views with the photographic look (`mvgrasp::dataset::photoreal`:
+//! textures, gloss, room lights, a background, sensor noise, blur and JPEG) instead of random
+//! colours under each camera's headlight.
 //!
 //! Per method and N, over the top-down view and over all N views: the mean absolute error of
 //! the predicted object pixels (millimetres), the share of object pixels predicted, the shares
@@ -25,6 +29,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use clap::Parser;
+use mvgrasp::dataset::photoreal::render_photoreal;
 use mvgrasp::evaluate::depth::DepthErrors;
 use mvgrasp::geometry::objects::{Category, generate};
 use mvgrasp::geometry::{HemisphereLayout, Intrinsics, IntrinsicsPreset, RestingPoses};
@@ -58,6 +63,9 @@ struct Args {
     /// planner gets them (`DepthPredictor::for_one_view`), instead of missing (`plan --rgb`).
     #[arg(long)]
     sweep_hull: bool,
+    /// The photographic look instead of the flat one (`--per-face` is then ignored).
+    #[arg(long)]
+    photo: bool,
 }
 
 /// `errors` as the table's cells: median, MAE, predicted, within 2 mm, within 5 mm,
@@ -147,14 +155,25 @@ fn run(args: &Args) -> Result<(), String> {
             let cameras = layout
                 .cameras(intrinsics, target, u64::from(index))
                 .map_err(|e| e.to_string())?;
-            let rendered = render_rgb(
-                &renderer,
-                &object.mesh,
-                &pose.table_from_object,
-                &cameras,
-                &input,
-                u64::from(index),
-            )
+            let rendered = if args.photo {
+                render_photoreal(
+                    &renderer,
+                    &object.mesh,
+                    &pose.table_from_object,
+                    &cameras,
+                    u64::from(index),
+                )
+                .map(|photo| photo.views)
+            } else {
+                render_rgb(
+                    &renderer,
+                    &object.mesh,
+                    &pose.table_from_object,
+                    &cameras,
+                    &input,
+                    u64::from(index),
+                )
+            }
             .map_err(|e| e.to_string())?;
             objects += 1;
             for (c, &n) in counts.iter().enumerate() {
@@ -225,10 +244,16 @@ fn run(args: &Args) -> Result<(), String> {
     }
     eprintln!();
     println!(
-        "{objects} objects (indices 30-{}), 10 test views {:.2} m away, colours per {}",
+        "{objects} objects (indices 30-{}), 10 test views {:.2} m away, {}",
         29 + args.per_category,
         args.distance_m,
-        if args.per_face { "triangle" } else { "vertex" }
+        if args.photo {
+            "the photographic look"
+        } else if args.per_face {
+            "colours per triangle"
+        } else {
+            "colours per vertex"
+        }
     );
     println!(
         "| method | input views | views scored | median (mm) | MAE (mm) | predicted | within 2 mm | within 5 mm | normalised | time (s) |"

@@ -3,14 +3,16 @@
 //! cameras 0.4 to 0.8 m away (elevations 15 to 85 degrees, the first top-down in half the
 //! samples), coloured at random per vertex or per triangle; in half the samples the plane
 //! sweep runs on cameras moved by up to 2 mm and 0.5 degrees (a rig's calibration error), in
-//! the other half on the true ones; each of up to
+//! the other half on the true ones; with `--photo-share P`, a share P of the samples is
+//! rendered with the photographic look (`mvgrasp::dataset::photoreal`: textures, gloss, room
+//! lights, background, sensor noise, blur, JPEG) instead of the flat one; each of up to
 //! `--views-per-sample` of the views is written as `SSSSS_V.npy`: float32
 //! `[FEATURES + 2, h, w]`, the refiner's features (`mvgrasp::sweep_refiner::view_features`)
 //! then the base depth and the rendered depth (metres) over the object's box.
 //!
 //! ```text
 //! cargo run --release --example sweep_refiner_data -- --out ../datasets/sweep_refiner \
-//!     [--samples 400] [--first-sample 0] [--seed 0]
+//!     [--samples 400] [--first-sample 0] [--seed 0] [--photo-share 0.75]
 //! ```
 //!
 //! Deterministic by seed; a finished sample (`SSSSS.done`) is skipped (files are written to a
@@ -23,9 +25,11 @@ use std::process::ExitCode;
 mod common;
 
 use clap::Parser;
+use mvgrasp::dataset::photoreal::render_photoreal;
 use mvgrasp::geometry::objects::{Category, generate};
 use mvgrasp::geometry::{
-    Camera, HemisphereLayout, Intrinsics, IntrinsicsPreset, Pose3, RestingPoses, Rot3, Vec3,
+    Camera, HemisphereLayout, Intrinsics, IntrinsicsPreset, Pose3, RestingPoses, Rot3,
+    TriangleMesh, Vec3,
 };
 use mvgrasp::planner::{DepthPredictor, RgbInput, render_rgb};
 use mvgrasp::render::{Backend, Renderer};
@@ -56,6 +60,10 @@ struct Args {
     /// Seed of every draw.
     #[arg(long, default_value_t = 0)]
     seed: u64,
+    /// Share of the samples rendered with the photographic look (0 to 1; 0 draws nothing
+    /// for it, so the flat samples are the same bytes as without the option).
+    #[arg(long, default_value_t = 0.0)]
+    photo_share: f64,
 }
 
 fn main() -> ExitCode {
@@ -65,6 +73,12 @@ fn main() -> ExitCode {
 fn run(args: &Args) -> Result<(), String> {
     std::fs::create_dir_all(&args.out)
         .map_err(|e| format!("cannot create {}: {e}", args.out.display()))?;
+    if !(0.0..=1.0).contains(&args.photo_share) {
+        return Err(format!(
+            "--photo-share {}: expected 0 to 1",
+            args.photo_share
+        ));
+    }
     let renderer = Renderer::new(Backend::Auto).map_err(|e| e.to_string())?;
     let intrinsics = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
     for sample in args.first_sample..args.first_sample + args.samples {
@@ -85,6 +99,7 @@ fn run(args: &Args) -> Result<(), String> {
         "per_category": args.per_category,
         "views_per_sample": args.views_per_sample,
         "seed": args.seed,
+        "photo_share": args.photo_share,
         "library_seed": 2,
         "features": FEATURES,
         "channels_after_features": ["base_m", "truth_m"],
@@ -128,7 +143,9 @@ fn write_sample(
         depth: DepthPredictor::Baseline(RefinedSweep::sweep_params()),
         per_face: rng.random_bool(0.5),
     };
-    let rendered = render_rgb(
+    let photo = args.photo_share > 0.0 && rng.random_bool(args.photo_share);
+    let render = if photo { render_photo } else { render_flat };
+    let rendered = render(
         renderer,
         &object.mesh,
         &pose.table_from_object,
@@ -169,6 +186,32 @@ fn write_sample(
         written += 1;
     }
     Ok(written)
+}
+
+type Rendered = mvgrasp::Result<Vec<(RgbView, Vec<f32>)>>;
+
+/// The datasets' flat look: random colours under each camera's headlight.
+fn render_flat(
+    renderer: &Renderer,
+    mesh: &TriangleMesh,
+    table_from_object: &Pose3,
+    cameras: &[Camera],
+    input: &RgbInput,
+    seed: u64,
+) -> Rendered {
+    render_rgb(renderer, mesh, table_from_object, cameras, input, seed)
+}
+
+/// The photographic look (colours per vertex whatever `input` says).
+fn render_photo(
+    renderer: &Renderer,
+    mesh: &TriangleMesh,
+    table_from_object: &Pose3,
+    cameras: &[Camera],
+    _input: &RgbInput,
+    seed: u64,
+) -> Rendered {
+    render_photoreal(renderer, mesh, table_from_object, cameras, seed).map(|photo| photo.views)
 }
 
 /// `camera` moved by up to 2 mm and turned by up to 0.5 degrees, uniformly at random.

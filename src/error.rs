@@ -114,6 +114,12 @@ pub enum Error {
         /// What is wrong.
         problem: String,
     },
+    /// A photographic look that cannot be applied ([`crate::dataset::photoreal`]).
+    #[error("photographic look: {problem}")]
+    Photo {
+        /// What is wrong.
+        problem: String,
+    },
     /// An evaluation that cannot go on: its object set, its record folder or its options.
     #[error("evaluate: {problem}")]
     Evaluate {
@@ -222,6 +228,7 @@ impl Error {
             | Self::ForeignDataset { .. }
             | Self::ForeignShard { .. }
             | Self::EmptyDataset { .. }
+            | Self::Photo { .. }
             | Self::Evaluate { .. } => ErrorKind::Dataset,
         }
     }

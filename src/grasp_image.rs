@@ -6,7 +6,7 @@ use std::path::Path;
 
 use mvgrasp_geometry::{Camera, Intrinsics, Pose3, Rot3, TriangleMesh, Vec3};
 use mvgrasp_grasp::{Grasp, Gripper};
-use mvgrasp_render::{Backend, Colors, IDENTITY, MeshInput, Renderer, Sides};
+use mvgrasp_render::{Backend, Colors, IDENTITY, Material, MeshInput, Renderer, Sides};
 use parry3d::shape::Cuboid;
 
 use crate::convert::{render_view, row_major, sides_of};
@@ -89,6 +89,7 @@ pub fn write_colored_grasp_picture(
             colors: Colors::Uniform(OBJECT_RGB),
             world_from_mesh: row_major(table_from_object),
             instance_id: 1,
+            material: Material::MATTE,
         },
         MeshInput {
             positions: &table_positions,
@@ -97,6 +98,7 @@ pub fn write_colored_grasp_picture(
             colors: Colors::Uniform(TABLE_RGB),
             world_from_mesh: IDENTITY,
             instance_id: 2,
+            material: Material::MATTE,
         },
     ];
     for (positions, triangles, color) in &boxes {
@@ -107,6 +109,7 @@ pub fn write_colored_grasp_picture(
             colors: Colors::Uniform(*color),
             world_from_mesh: IDENTITY,
             instance_id: 3,
+            material: Material::MATTE,
         });
     }
     let renderer = Renderer::new(Backend::Auto)?;

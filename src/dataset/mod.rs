@@ -16,6 +16,7 @@
 //! interrupted run leaves no half object; a rerun skips finished objects.
 
 pub(crate) mod images;
+pub mod photoreal;
 mod scene;
 
 pub use images::{DEPTH_PNG_UNITS_PER_M, write_depth_png, write_png8};

@@ -3,7 +3,7 @@
 
 use mvgrasp_geometry::{Pose3, RestingPoses, TriangleMesh};
 pub use mvgrasp_planner::seed::{name_hash, splitmix};
-use mvgrasp_render::{Colors, IDENTITY, MeshInput, Sides, random_colors};
+use mvgrasp_render::{Colors, IDENTITY, Material, MeshInput, Sides, random_colors};
 use serde::Serialize;
 
 use crate::convert::{row_major, sides_of};
@@ -138,6 +138,7 @@ impl SceneData {
             colors,
             world_from_mesh: self.world_from_object,
             instance_id: OBJECT_ID,
+            material: Material::MATTE,
         }];
         if table {
             inputs.push(MeshInput {
@@ -147,6 +148,7 @@ impl SceneData {
                 colors: Colors::Uniform(TABLE_RGB),
                 world_from_mesh: IDENTITY,
                 instance_id: TABLE_ID,
+                material: Material::MATTE,
             });
         }
         inputs

@@ -42,6 +42,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             colors: Colors::PerFace(&colors),
             world_from_mesh: IDENTITY,
             instance_id: 1,
+            material: mvgrasp_render::Material::MATTE,
         }])?;
         let upload_ms = start.elapsed().as_secs_f64() * 1e3;
         let warm = renderer.render(&scene, &views)?;

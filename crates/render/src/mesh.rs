@@ -4,6 +4,7 @@
 
 use crate::camera::{affine_error, transform_point};
 use crate::error::{RenderError, Result};
+use crate::look::Material;
 
 /// Colours of a mesh, sRGB-free 8-bit RGB multiplied by the shading.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -43,10 +44,13 @@ pub struct MeshInput<'a> {
     pub world_from_mesh: [[f32; 4]; 4],
     /// Id written to the mask where this mesh is visible: 1..=255 (0 is the background).
     pub instance_id: u8,
+    /// Its texture and highlight under [`crate::Lighting::World`] ([`Material::MATTE`]: flat).
+    pub material: Material,
 }
 
-/// Bytes of one GPU vertex: position (3 x f32), normal (3 x f32), colour (4 x u8), id (u32).
-pub(crate) const VERTEX_BYTES: usize = 32;
+/// Bytes of one GPU vertex: position (3 x f32), normal (3 x f32), colour (4 x u8), id (u32),
+/// material (8 x u8).
+pub(crate) const VERTEX_BYTES: usize = 40;
 
 /// The expanded vertex stream: the [`Sides::Front`] meshes' vertices first, then the others.
 #[derive(Debug)]
@@ -79,6 +83,7 @@ pub(crate) fn expand(meshes: &[MeshInput<'_>]) -> Result<Expanded> {
         meshes.iter().partition(|m| m.sides == Sides::Front);
     let front_vertices = front.iter().map(|m| 3 * m.indices.len()).sum();
     for mesh in front.into_iter().chain(both) {
+        let material = mesh.material.vertex_bytes();
         let world: Vec<[f32; 3]> = mesh
             .positions
             .iter()
@@ -94,6 +99,7 @@ pub(crate) fn expand(meshes: &[MeshInput<'_>]) -> Result<Expanded> {
                     Colors::Uniform(rgb) => rgb,
                 };
                 push_vertex(&mut bytes, corners[c], normal, rgb, mesh.instance_id);
+                bytes.extend_from_slice(&material);
             }
         }
     }
@@ -144,6 +150,7 @@ fn validate(mesh: &MeshInput<'_>, mesh_index: usize) -> Result<()> {
     if got != expected {
         return Err(bad(format!("{got} {kind} colours, expected {expected}")));
     }
+    mesh.material.validate(mesh_index)?;
     if let Some(reason) = affine_error(&mesh.world_from_mesh) {
         return Err(bad(format!(
             "world_from_mesh is not an affine transform: {reason}"
@@ -180,7 +187,7 @@ fn face_normal([a, b, c]: [[f32; 3]; 3]) -> [f32; 3] {
     }
 }
 
-/// Appends one vertex in the layout of `shader.wgsl`'s `VertexIn`.
+/// Appends one vertex in the layout of `shader.wgsl`'s `VertexIn`, but for its material.
 fn push_vertex(out: &mut Vec<u8>, p: [f32; 3], n: [f32; 3], rgb: [u8; 3], id: u8) {
     for x in p.iter().chain(n.iter()) {
         out.extend_from_slice(&x.to_ne_bytes());
@@ -204,6 +211,7 @@ mod tests {
             colors: Colors::Uniform([10, 20, 30]),
             world_from_mesh: IDENTITY,
             instance_id: 7,
+            material: Material::MATTE,
         }
     }
 

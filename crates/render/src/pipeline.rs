@@ -3,11 +3,12 @@
 
 use std::num::NonZeroU64;
 
+use crate::look::LIGHTING_UNIFORM_BYTES;
 use crate::mesh::VERTEX_BYTES;
 use crate::targets::{COLOR_FORMAT, DEPTH_OUT_FORMAT, ZBUFFER_FORMAT};
 
-/// Bytes of the per-view uniform block: two 4x4 f32 matrices.
-pub(crate) const VIEW_UNIFORM_BYTES: u64 = 128;
+/// Bytes of the per-view uniform block: two 4x4 f32 matrices, then the lighting.
+pub(crate) const VIEW_UNIFORM_BYTES: u64 = 128 + LIGHTING_UNIFORM_BYTES;
 
 /// The compiled pipelines and the layout of their per-view bind group.
 pub(crate) struct Pipeline {
@@ -18,11 +19,13 @@ pub(crate) struct Pipeline {
     pub view_layout: wgpu::BindGroupLayout,
 }
 
-const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 4] = wgpu::vertex_attr_array![
+const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![
     0 => Float32x3, // position, world
     1 => Float32x3, // face normal, world
     2 => Unorm8x4,  // colour, alpha unused
     3 => Uint32,    // instance id
+    4 => Unorm8x4,  // material: pattern code / 255, specular, shininess, frequency (log2-coded)
+    5 => Unorm8x4,  // material: second colour, contrast
 ];
 
 impl Pipeline {
@@ -35,7 +38,7 @@ impl Pipeline {
             label: Some("mvgrasp-render view uniforms"),
             entries: &[wgpu::BindGroupLayoutEntry {
                 binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX,
+                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
                 ty: wgpu::BindingType::Buffer {
                     ty: wgpu::BufferBindingType::Uniform,
                     has_dynamic_offset: true,

@@ -9,6 +9,7 @@ use crate::adapter::{self, Backend, Gpu};
 use crate::camera::{View, clip_from_camera, column_major, validate_view};
 use crate::error::{RenderError, Result};
 use crate::frame::Frame;
+use crate::look::Lighting;
 use crate::mesh::{MeshInput, expand};
 use crate::pipeline::{Pipeline, VIEW_UNIFORM_BYTES};
 use crate::readback::{encode_copies, plan, read_frames, slot_bytes};
@@ -193,6 +194,21 @@ impl Renderer {
     /// [`RenderError::ForeignScene`] for a scene of another renderer,
     /// [`RenderError::BufferMap`] / [`RenderError::Backend`] when the device fails.
     pub fn render(&self, scene: &Scene, views: &[View]) -> Result<Vec<Frame>> {
+        self.render_lit(scene, views, &Lighting::Headlight)
+    }
+
+    /// [`Renderer::render`] under `lighting` ([`Lighting::World`]: lights fixed in the world,
+    /// the meshes' materials drawn, the background in its colour).
+    ///
+    /// # Errors
+    /// As [`Renderer::render`], and [`RenderError::InvalidParameter`] for bad lighting.
+    pub fn render_lit(
+        &self,
+        scene: &Scene,
+        views: &[View],
+        lighting: &Lighting,
+    ) -> Result<Vec<Frame>> {
+        lighting.validate()?;
         if scene.renderer_id != self.id {
             return Err(RenderError::ForeignScene {
                 scene_renderer: scene.renderer_id,
@@ -227,7 +243,7 @@ impl Renderer {
                 bytes += need;
                 end += 1;
             }
-            frames.extend(self.render_batch(&mut state, scene, &views[start..end])?);
+            frames.extend(self.render_batch(&mut state, scene, &views[start..end], lighting)?);
             start = end;
         }
         Ok(frames)
@@ -257,7 +273,13 @@ impl Renderer {
 
     /// One submission: a render pass and two copies per view, then one map of the staging
     /// buffer.
-    fn render_batch(&self, state: &mut State, scene: &Scene, views: &[View]) -> Result<Vec<Frame>> {
+    fn render_batch(
+        &self,
+        state: &mut State,
+        scene: &Scene,
+        views: &[View],
+        lighting: &Lighting,
+    ) -> Result<Vec<Frame>> {
         let device = &self.gpu.device;
         let limits = &self.gpu.limits;
         let State {
@@ -284,7 +306,9 @@ impl Renderer {
                 column_major(&view.camera_from_world),
                 column_major(&clip_from_camera(&view.intrinsics)),
             ];
-            for (x, out) in matrices.iter().flatten().zip(chunk.chunks_exact_mut(4)) {
+            let lights = lighting.uniform_floats(&view.camera_from_world);
+            let floats = matrices.iter().flatten().chain(&lights);
+            for (x, out) in floats.zip(chunk.chunks_exact_mut(4)) {
                 out.copy_from_slice(&x.to_ne_bytes());
             }
         }
@@ -325,6 +349,10 @@ impl Renderer {
                 load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
                 store: wgpu::StoreOp::Store,
             };
+            let clear_color = wgpu::Operations {
+                load: wgpu::LoadOp::Clear(lighting.clear_color()),
+                store: wgpu::StoreOp::Store,
+            };
             {
                 let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some("mvgrasp-render view"),
@@ -333,7 +361,7 @@ impl Renderer {
                             view: &t.color_view,
                             depth_slice: None,
                             resolve_target: None,
-                            ops: clear,
+                            ops: clear_color,
                         }),
                         Some(wgpu::RenderPassColorAttachment {
                             view: &t.depth_out_view,

@@ -63,6 +63,7 @@ fn upload_with(
             colors: Colors::PerVertex(&s.colours),
             world_from_mesh: lifted,
             instance_id: 1,
+            material: mvgrasp_render::Material::MATTE,
         },
         MeshInput {
             positions: &s.table.0,
@@ -71,6 +72,7 @@ fn upload_with(
             colors: Colors::PerFace(&[[180, 180, 170]; 12]),
             world_from_mesh: IDENTITY,
             instance_id: 2,
+            material: mvgrasp_render::Material::MATTE,
         },
     ])
     .unwrap()

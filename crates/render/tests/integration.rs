@@ -7,3 +7,4 @@ mod common;
 mod batch;
 mod errors;
 mod geometry;
+mod look;

@@ -142,6 +142,7 @@ pub fn mesh<'a>(
         colors: Colors::Uniform(color),
         world_from_mesh: IDENTITY,
         instance_id,
+        material: mvgrasp_render::Material::MATTE,
     }
 }
 
