@@ -11,6 +11,7 @@ pub mod mesh;
 mod pipeline;
 mod readback;
 pub mod renderer;
+mod shadow;
 mod targets;
 
 pub use adapter::{BACKEND_ENV, Backend};

@@ -5,6 +5,7 @@
 use crate::camera::{affine_error, transform_point};
 use crate::error::{RenderError, Result};
 use crate::look::Material;
+use crate::shadow::Bounds;
 
 /// Colours of a mesh, sRGB-free 8-bit RGB multiplied by the shading.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -61,6 +62,8 @@ pub(crate) struct Expanded {
     pub front_vertices: usize,
     /// All vertices.
     pub vertices: usize,
+    /// A sphere holding every vertex.
+    pub bounds: Bounds,
 }
 
 /// Checks every mesh and expands them all into one flat-shaded vertex stream, front-only meshes
@@ -82,6 +85,7 @@ pub(crate) fn expand(meshes: &[MeshInput<'_>]) -> Result<Expanded> {
     let (front, both): (Vec<&MeshInput<'_>>, Vec<_>) =
         meshes.iter().partition(|m| m.sides == Sides::Front);
     let front_vertices = front.iter().map(|m| 3 * m.indices.len()).sum();
+    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
     for mesh in front.into_iter().chain(both) {
         let material = mesh.material.vertex_bytes();
         let world: Vec<[f32; 3]> = mesh
@@ -89,6 +93,12 @@ pub(crate) fn expand(meshes: &[MeshInput<'_>]) -> Result<Expanded> {
             .iter()
             .map(|&p| transform_point(&mesh.world_from_mesh, p))
             .collect();
+        for p in &world {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
         for (t, tri) in mesh.indices.iter().enumerate() {
             let corners = tri.map(|i| world[i as usize]);
             let normal = face_normal(corners);
@@ -103,10 +113,16 @@ pub(crate) fn expand(meshes: &[MeshInput<'_>]) -> Result<Expanded> {
             }
         }
     }
+    let center: [f32; 3] = std::array::from_fn(|k| 0.5 * (lo[k] + hi[k]));
+    let radius = (0..3)
+        .map(|k| (0.5 * (hi[k] - lo[k])).powi(2))
+        .sum::<f32>()
+        .sqrt();
     Ok(Expanded {
         bytes,
         front_vertices,
         vertices,
+        bounds: Bounds { center, radius },
     })
 }
 

@@ -5,6 +5,7 @@ use std::num::NonZeroU64;
 
 use crate::look::LIGHTING_UNIFORM_BYTES;
 use crate::mesh::VERTEX_BYTES;
+use crate::shadow::ShadowPipeline;
 use crate::targets::{COLOR_FORMAT, DEPTH_OUT_FORMAT, ZBUFFER_FORMAT};
 
 /// Bytes of the per-view uniform block: two 4x4 f32 matrices, then the lighting.
@@ -17,6 +18,8 @@ pub(crate) struct Pipeline {
     /// Culls back faces, counter-clockwise in the image being the front ([`crate::Sides::Front`]).
     pub front_only: wgpu::RenderPipeline,
     pub view_layout: wgpu::BindGroupLayout,
+    /// The shadow maps' pass, and the layout of the views' shadow bindings (group 1).
+    pub shadow: ShadowPipeline,
 }
 
 const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![
@@ -47,9 +50,10 @@ impl Pipeline {
                 count: None,
             }],
         });
+        let shadow = ShadowPipeline::new(device, &shader);
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("mvgrasp-render layout"),
-            bind_group_layouts: &[Some(&view_layout)],
+            bind_group_layouts: &[Some(&view_layout), Some(&shadow.lookup_layout)],
             immediate_size: 0,
         });
         let replace = |format| {
@@ -102,6 +106,7 @@ impl Pipeline {
             two_sided: make("mvgrasp-render two-sided pipeline", None),
             front_only: make("mvgrasp-render front-only pipeline", Some(wgpu::Face::Back)),
             view_layout,
+            shadow,
         }
     }
 }

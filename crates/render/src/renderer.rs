@@ -13,6 +13,7 @@ use crate::look::Lighting;
 use crate::mesh::{MeshInput, expand};
 use crate::pipeline::{Pipeline, VIEW_UNIFORM_BYTES};
 use crate::readback::{encode_copies, plan, read_frames, slot_bytes};
+use crate::shadow::{Bounds, SHADOW_MAP_PX, ShadowMaps};
 use crate::targets::{GrowBuffer, TargetCache};
 
 /// Read-back bytes one batch may hold; more views are rendered in several submissions.
@@ -30,6 +31,8 @@ pub struct Renderer {
     id: u64,
     gpu: Gpu,
     pipeline: Pipeline,
+    /// 1-pixel shadow maps bound under the headlight, which never samples them.
+    no_shadows: ShadowMaps,
     state: Mutex<State>,
 }
 
@@ -39,16 +42,20 @@ struct State {
     uniforms: GrowBuffer,
     uniforms_bind_group: Option<wgpu::BindGroup>,
     staging: GrowBuffer,
+    /// The world lights' shadow maps, made on the first [`Lighting::World`] render.
+    shadows: Option<ShadowMaps>,
 }
 
 /// Meshes uploaded to a renderer's device, ready to draw from any number of views.
 pub struct Scene {
     renderer_id: u64,
-    vertices: wgpu::Buffer,
+    pub(crate) vertices: wgpu::Buffer,
     /// The front-only meshes' vertices come first in `vertices`.
     front_vertex_count: u32,
-    vertex_count: u32,
+    pub(crate) vertex_count: u32,
     mesh_count: usize,
+    /// A sphere holding the scene (the shadow maps cover it).
+    pub(crate) bounds: Bounds,
 }
 
 impl Scene {
@@ -93,9 +100,11 @@ impl Renderer {
     pub fn new(backend: Backend) -> Result<Self> {
         let gpu = adapter::open(backend)?;
         let pipeline = Pipeline::new(&gpu.device);
+        let no_shadows = ShadowMaps::new(&gpu.device, &pipeline.shadow, 1);
         let renderer = Self {
             id: NEXT_RENDERER_ID.fetch_add(1, Ordering::Relaxed),
             pipeline,
+            no_shadows,
             state: Mutex::new(State {
                 targets: TargetCache::default(),
                 uniforms: GrowBuffer::new(
@@ -107,6 +116,7 @@ impl Renderer {
                     "mvgrasp-render read-back",
                     wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
                 ),
+                shadows: None,
             }),
             gpu,
         };
@@ -150,6 +160,7 @@ impl Renderer {
     /// device's buffer size.
     pub fn upload(&self, meshes: &[MeshInput<'_>]) -> Result<Scene> {
         let expanded = expand(meshes)?;
+        let bounds = expanded.bounds;
         let (bytes, vertex_count) = (expanded.bytes, expanded.vertices);
         let limit = self.gpu.limits.max_buffer_size;
         let too_large = |what, needed: u64, limit: u64| RenderError::TooLarge {
@@ -182,6 +193,7 @@ impl Renderer {
             front_vertex_count: u32::try_from(expanded.front_vertices).unwrap_or(vertex_count),
             vertex_count,
             mesh_count: meshes.len(),
+            bounds,
         })
     }
 
@@ -287,6 +299,7 @@ impl Renderer {
             uniforms,
             uniforms_bind_group,
             staging,
+            shadows,
         } = state;
 
         let mut sizes: Vec<(u32, u32)> = views
@@ -339,6 +352,19 @@ impl Renderer {
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("mvgrasp-render views"),
         });
+        let shadow_maps = match lighting {
+            Lighting::Headlight => &self.no_shadows,
+            Lighting::World { .. } => shadows.get_or_insert_with(|| {
+                ShadowMaps::new(device, &self.pipeline.shadow, SHADOW_MAP_PX)
+            }),
+        };
+        shadow_maps.encode(
+            &self.gpu.queue,
+            &mut encoder,
+            &self.pipeline.shadow,
+            scene,
+            lighting,
+        );
         for (i, slot) in slots.iter().enumerate() {
             let Some(t) = targets.get(slot.width, slot.height) else {
                 return Err(internal("render targets were not prepared"));
@@ -383,6 +409,7 @@ impl Renderer {
                     multiview_mask: None,
                 });
                 pass.set_bind_group(0, bind_group, &[offset]);
+                pass.set_bind_group(1, &shadow_maps.lookup_group, &[]);
                 pass.set_vertex_buffer(0, scene.vertices.slice(..));
                 if scene.front_vertex_count > 0 {
                     pass.set_pipeline(&self.pipeline.front_only);

@@ -21,6 +21,18 @@ struct ViewUniforms {
 
 @group(0) @binding(0) var<uniform> view: ViewUniforms;
 
+// Shadows (shadow.rs): per light, the orthographic clip (depth 0..1) of its shadow map.
+struct ShadowUniforms {
+    light_clip_from_world: array<mat4x4<f32>, 4>,
+};
+
+@group(1) @binding(0) var<uniform> shadow: ShadowUniforms;
+@group(1) @binding(1) var shadow_maps: texture_depth_2d_array;
+@group(1) @binding(2) var shadow_sampler: sampler_comparison;
+
+// The shadow pass's light (a dynamic offset into one matrix per light).
+@group(0) @binding(0) var<uniform> shadow_pass_light: mat4x4<f32>;
+
 struct VertexIn {
     @location(0) position_world: vec3<f32>,
     @location(1) normal_world: vec3<f32>,
@@ -41,6 +53,7 @@ struct VertexOut {
     @location(4) position_world: vec3<f32>,
     @location(5) @interpolate(flat) material: vec4<f32>,
     @location(6) @interpolate(flat) second: vec4<f32>,
+    @location(7) @interpolate(flat) normal_world: vec3<f32>,
 };
 
 struct FragmentOut {
@@ -62,9 +75,26 @@ fn vs_main(in: VertexIn) -> VertexOut {
     out.color = in.color.rgb;
     out.instance_id = in.instance_id;
     out.position_world = in.position_world;
+    out.normal_world = in.normal_world;
     out.material = in.material;
     out.second = in.second;
     return out;
+}
+
+// The shadow maps' depth pass: only where the light sees.
+@vertex
+fn vs_shadow(@location(0) position_world: vec3<f32>) -> @builtin(position) vec4<f32> {
+    return shadow_pass_light * vec4<f32>(position_world, 1.0);
+}
+
+// How much of light i reaches world point p (0 in shadow, 1 lit; 2 x 2 filtered).
+fn light_reaching(i: i32, p: vec3<f32>) -> f32 {
+    let c = shadow.light_clip_from_world[i] * vec4<f32>(p, 1.0);
+    let uv = vec2<f32>(0.5 + 0.5 * c.x, 0.5 - 0.5 * c.y);
+    if (any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0)) || c.z > 1.0) {
+        return 1.0;
+    }
+    return textureSampleCompareLevel(shadow_maps, shadow_sampler, uv, i, c.z - 0.0015);
 }
 
 // A hash of a lattice point to [0, 1) (integer mixing: the same on every backend).
@@ -114,7 +144,7 @@ fn pattern(code: u32, p: vec3<f32>, cycles_per_m: f32) -> f32 {
 }
 
 // World lighting: textured colour, Lambert diffuse and Blinn-Phong highlights of every light.
-fn world_lit(in: VertexOut, n: vec3<f32>) -> vec3<f32> {
+fn world_lit(in: VertexOut, n: vec3<f32>, n_world: vec3<f32>) -> vec3<f32> {
     let code = u32(round(in.material.x * 255.0));
     let specular = in.material.y;
     let shininess = exp2(in.material.z * 9.0);
@@ -123,6 +153,8 @@ fn world_lit(in: VertexOut, n: vec3<f32>) -> vec3<f32> {
     let base = mix(in.color, in.second.rgb, in.second.a * t);
     let towards_eye = -normalize(in.position_camera);
     var lit = base * view.mode_ambient.yzw;
+    // Looked up a little off the surface, so that it does not shadow itself.
+    let lookup = in.position_world + 0.002 * n_world;
     for (var i = 0; i < 4; i++) {
         let light = view.light_towards[i];
         if (light.w > 0.0) {
@@ -130,7 +162,8 @@ fn world_lit(in: VertexOut, n: vec3<f32>) -> vec3<f32> {
             if (cosine > 0.0) {
                 let half_way = normalize(light.xyz + towards_eye);
                 let glint = specular * pow(max(dot(n, half_way), 0.0), shininess);
-                lit += (base * cosine + vec3<f32>(glint)) * view.light_rgb[i].rgb;
+                let reaching = light_reaching(i, lookup);
+                lit += reaching * (base * cosine + vec3<f32>(glint)) * view.light_rgb[i].rgb;
             }
         }
     }
@@ -154,7 +187,15 @@ fn fs_main(in: VertexOut) -> FragmentOut {
     let shade = AMBIENT + (1.0 - AMBIENT) * diffuse;
     var rgb = in.color * shade;
     if (view.mode_ambient.x > 0.5) {
-        rgb = world_lit(in, n);
+        // The world normal turned as the camera-frame one was (towards the camera).
+        var n_world = in.normal_world;
+        if (len > 0.0) {
+            n_world = normalize(n_world);
+            if (dot(in.normal_camera, in.position_camera) > 0.0) {
+                n_world = -n_world;
+            }
+        }
+        rgb = world_lit(in, n, n_world);
     }
     // The id is stored as unorm8: (id + 0.25) / 255 reads back as id whether the hardware
     // rounds to nearest or towards zero.

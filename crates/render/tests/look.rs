@@ -1,9 +1,9 @@
 //! World lighting and materials: lights fixed in the world, solid textures, highlights, the
 //! background's colour, and the headlight unchanged by materials.
 
-use mvgrasp_render::{Intrinsics, Light, Lighting, Material, Pattern};
+use mvgrasp_render::{Intrinsics, Light, Lighting, Material, Pattern, View, project};
 
-use crate::common::{centred, mesh, quad, renderers, view_at_origin};
+use crate::common::{centred, cuboid, look_at, mesh, quad, renderers, view_at_origin};
 
 /// One white light straight behind the camera (world = camera frame, looking along +z).
 fn behind_the_camera(ambient: f32) -> Lighting {
@@ -149,4 +149,65 @@ fn bad_lighting_is_refused_naming_the_field() {
         .unwrap_err()
         .to_string();
     assert!(err.contains("background_rgb"), "{err}");
+}
+
+#[test]
+fn a_box_casts_its_shadow_away_from_the_light() {
+    let Some(renderers) = renderers() else { return };
+    let k = centred(64, 48);
+    // A 4 cm cube on a plane, a light 45 degrees up from +x, a camera 1.5 m above (the image
+    // spans 17 x 13 cm of the plane).
+    let (plane_p, plane_i) = quad([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], 0.3);
+    let (cube_p, cube_i) = cuboid([0.0, 0.0, 0.02], [0.02, 0.02, 0.02]);
+    let camera_from_world = look_at([0.0, -0.01, 1.5], [0.0, 0.0, 0.0]);
+    let view = View {
+        intrinsics: k,
+        camera_from_world,
+    };
+    let lighting = Lighting::World {
+        ambient_rgb: [0.2; 3],
+        lights: vec![Light {
+            towards_world: [1.0, 0.0, 1.0],
+            rgb: [0.8; 3],
+        }],
+        background_rgb: [0.0; 3],
+    };
+    let pixel_of = |p: [f32; 3]| {
+        let m = camera_from_world;
+        let c: [f32; 3] =
+            std::array::from_fn(|r| m[r][0] * p[0] + m[r][1] * p[1] + m[r][2] * p[2] + m[r][3]);
+        let [u, v] = project(&k, c);
+        assert!(
+            u >= 0.0 && v >= 0.0 && u < 64.0 && v < 48.0,
+            "{p:?} is out of the image"
+        );
+        (u.round() as u32, v.round() as u32)
+    };
+    for r in renderers {
+        let scene = r
+            .upload(&[
+                mesh(&plane_p, &plane_i, [200, 200, 200], 1),
+                mesh(&cube_p, &cube_i, [200, 200, 200], 2),
+            ])
+            .unwrap();
+        let f = &r.render_lit(&scene, &[view], &lighting).unwrap()[0];
+        let level = |p: [f32; 3]| {
+            let (u, v) = pixel_of(p);
+            assert_eq!(f.mask_at(u, v), Some(1), "{p:?} is on the plane");
+            f.rgb_at(u, v).unwrap()[0]
+        };
+        // Lit plane: (0.2 + 0.8 cos 45) x 200 = 153; in the shadow: 0.2 x 200 = 40.
+        let lit = level([0.04, 0.0, 0.0]);
+        let shadowed = level([-0.04, 0.0, 0.0]);
+        let far = level([-0.08, 0.0, 0.0]);
+        assert!((f32::from(lit) - 153.0).abs() <= 3.0, "lit {lit}");
+        assert!(
+            (f32::from(shadowed) - 40.0).abs() <= 3.0,
+            "shadowed {shadowed}"
+        );
+        assert!(
+            (f32::from(far) - 153.0).abs() <= 3.0,
+            "past the shadow {far}"
+        );
+    }
 }
