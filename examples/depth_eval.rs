@@ -97,6 +97,7 @@ fn run(args: &Args) -> Result<(), String> {
     let input = RgbInput {
         depth: DepthPredictor::Baseline(sweep.clone()),
         per_face: args.per_face,
+        photo: false,
     };
     let lsm = models::LSM
         .load()

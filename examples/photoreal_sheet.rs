@@ -82,6 +82,7 @@ fn run(args: &Args) -> Result<(), String> {
             &RgbInput {
                 depth: DepthPredictor::Baseline(SweepParams::default()),
                 per_face: false,
+                photo: false,
             },
             seed,
         )

@@ -141,6 +141,10 @@ struct Args {
     /// The RGB policies colour the objects per triangle instead of per vertex.
     #[arg(long)]
     rgb_per_face: bool,
+    /// The RGB policies' views are rendered with the photographic look
+    /// (`mvgrasp::dataset::photoreal`) instead of the flat one.
+    #[arg(long)]
+    photo: bool,
     /// Try every re-scored candidate of the fused policies in physics and write one JSON line
     /// per candidate to this file (object, policy, rank, scores, tilt, outcome): the data for
     /// choosing how candidates are ranked, on the development set.
@@ -376,6 +380,7 @@ fn run(args: &Args) -> Result<(), String> {
                         depth
                     },
                     per_face: args.rgb_per_face,
+                    photo: args.photo,
                 })
             }
             None => None,

@@ -142,6 +142,7 @@ fn write_sample(
     let input = RgbInput {
         depth: DepthPredictor::Baseline(RefinedSweep::sweep_params()),
         per_face: rng.random_bool(0.5),
+        photo: false,
     };
     let photo = args.photo_share > 0.0 && rng.random_bool(args.photo_share);
     let render = if photo { render_photo } else { render_flat };

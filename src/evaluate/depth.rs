@@ -165,6 +165,7 @@ impl DepthSuite {
             input: RgbInput {
                 depth: DepthPredictor::Baseline(SweepParams::default()),
                 per_face: false,
+                photo: false,
             },
         })
     }

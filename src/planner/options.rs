@@ -48,6 +48,9 @@ pub struct PlanOptions {
     /// the top-down GQ-CNN's grasps on predicted depth held at least as often as the
     /// multi-view planner's).
     pub depth_from: Option<DepthFrom>,
+    /// With `depth_from`: the views rendered with the photographic look
+    /// ([`crate::dataset::photoreal`]) instead of the flat one.
+    pub photo: bool,
 }
 
 impl Default for PlanOptions {
@@ -63,6 +66,7 @@ impl Default for PlanOptions {
             stable_pose: 0,
             physics: true,
             depth_from: None,
+            photo: false,
         }
     }
 }
@@ -165,6 +169,7 @@ impl PlanOptions {
                     depth.for_one_view()
                 },
                 per_face: false,
+                photo: self.photo,
             });
             // Without fusion every view predicts depth, and the network plans in the first,
             // top-down one.

@@ -12,6 +12,7 @@ use mvgrasp_render::{Colors, Renderer, random_colors};
 use serde::Serialize;
 
 use crate::convert::render_view;
+use crate::dataset::photoreal::render_photoreal;
 use crate::dataset::{OBJECT_ID, SceneData, TABLE_HALF_SIDE_M, splitmix};
 use crate::error::Result;
 use crate::grasp_dataset::GraspDatasetConfig;
@@ -90,6 +91,10 @@ pub struct RgbInput {
     /// Random colours per triangle (as half the RGB-D datasets' objects) instead of per vertex
     /// (interpolated across the faces).
     pub per_face: bool,
+    /// The photographic look ([`crate::dataset::photoreal`]: textures, gloss, room lights and
+    /// shadows, a background, sensor noise, blur, JPEG) instead of random colours under each
+    /// camera's headlight (`per_face` is then ignored).
+    pub photo: bool,
 }
 
 /// One view's share of the plan.
@@ -219,17 +224,19 @@ pub fn render_scene(
             .map(|(i, (depth, camera))| View::new(i, camera, depth))
             .collect::<mvgrasp_planner::Result<Vec<_>>>()?,
         Some(rgb) => {
-            let views: Vec<RgbView> = render_rgb(
-                renderer,
-                mesh,
-                &table_from_object,
-                &cameras,
-                rgb,
-                params.seed,
-            )?
-            .into_iter()
-            .map(|(view, _)| view)
-            .collect();
+            let rendered = if rgb.photo {
+                render_photoreal(renderer, mesh, &table_from_object, &cameras, params.seed)?.views
+            } else {
+                render_rgb(
+                    renderer,
+                    mesh,
+                    &table_from_object,
+                    &cameras,
+                    rgb,
+                    params.seed,
+                )?
+            };
+            let views: Vec<RgbView> = rendered.into_iter().map(|(view, _)| view).collect();
             let started = Instant::now();
             let predicted = predict_views(&views, &rgb.depth)?;
             depth_s = started.elapsed().as_secs_f64();

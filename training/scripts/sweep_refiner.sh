@@ -1,15 +1,17 @@
 #!/usr/bin/env bash
 # The sweep refiner (models/sweep_refiner_small) from a clean clone: its samples
 # (examples/sweep_refiner_data.rs: built-in objects of library seed 2 under random camera rigs,
-# the plane sweep run on each), then its training run (training/configs/sweep_refiner_small.toml),
-# exported. Both steps resume where an interrupted run stopped.
+# three in four rendered with the photographic look (mvgrasp::dataset::photoreal: textures,
+# gloss, room lights and shadows, backgrounds, sensor noise, blur, JPEG), the plane sweep run on
+# each), then its training run (training/configs/sweep_refiner_small.toml), exported. Both
+# steps resume where an interrupted run stopped.
 #
 #   training/scripts/sweep_refiner.sh            # ~25 min of samples + ~45 min of training (2 cores)
 #   QUICK=1 training/scripts/sweep_refiner.sh    # a minute: 8 samples, 1 short epoch, scratch folder
 #   INSTALL=1 training/scripts/sweep_refiner.sh  # then copy the export into models/
 #
 # PYTHON, else .venv/bin/python, else python3 (torch, numpy, safetensors, matplotlib). Samples
-# go to ../datasets/sweep_refiner and the run to ../runs/sweep_refiner_small beside the
+# go to ../datasets/sweep_refiner_photo and the run to ../runs/sweep_refiner_small beside the
 # repository (QUICK=1: a temporary folder).
 set -euo pipefail
 
@@ -22,19 +24,19 @@ fi
 export PYTHONPATH="$root/training${PYTHONPATH:+:$PYTHONPATH}"
 if [[ ${QUICK:-0} == 1 ]]; then
     work=$(mktemp -d)
-    data=$work/datasets/sweep_refiner
+    data=$work/datasets/sweep_refiner_photo
     runs=$work/runs
     samples=8
     edits=(-e "s|^epochs = .*|epochs = 1|" -e "s|^samples_per_epoch = .*|samples_per_epoch = 32|")
 else
-    data=$root/../datasets/sweep_refiner
+    data=$root/../datasets/sweep_refiner_photo
     runs=$root/../runs
     samples=1000
     edits=()
 fi
 mkdir -p "$runs"
 cargo build --release --quiet --example sweep_refiner_data
-target/release/examples/sweep_refiner_data --out "$data" --samples "$samples"
+target/release/examples/sweep_refiner_data --out "$data" --samples "$samples" --photo-share 0.75
 config=$runs/sweep_refiner_small.toml
 sed "${edits[@]}" -e "s|^dataset_dir = .*|dataset_dir = \"$data\"|" \
     training/configs/sweep_refiner_small.toml > "$config"

@@ -122,6 +122,11 @@ struct Args {
     /// planner in all), and the summary also gives the same run on the rendered depth.
     #[arg(long, conflicts_with_all = ["depth", "views_dir"])]
     depth_from: Option<String>,
+    /// On a mesh, render the colour views with the photographic look (textured, glossy,
+    /// lit by the room with shadows, a background, sensor noise, blur and JPEG;
+    /// docs/depth-from-rgb.md) instead of random colours under each camera's light.
+    #[arg(long, conflicts_with_all = ["depth", "views_dir", "rgb"])]
+    photo: bool,
     /// Write `grasps.json` (the ranked grasps with their poses; docs/planning.md, "grasps.json") and, for
     /// sensor depth, a picture of the best grasps over each view (`overlay_N.png`) and an MCAP
     /// log for robot tooling (`plan.mcap`: depth, calibrations, poses, table, grasps) into this
@@ -185,13 +190,20 @@ fn run(args: &Args) -> Result<bool, String> {
         },
     )
     .map_err(|e| e.to_string())?;
+    let depth_from = depth_from_of(args)?;
+    if args.photo && depth_from.is_none() {
+        return Err("--photo renders the colour views depth is predicted from; \
+                    --depth-from rendered has none"
+            .into());
+    }
     let options = PlanOptions {
         camera: preset,
         views: args.views,
         distance_m: args.distance_m,
         stable_pose: args.stable_pose,
         physics: !args.no_physics,
-        depth_from: depth_from_of(args)?,
+        depth_from,
+        photo: args.photo,
         ..options_of(args)
     };
     let (model_name, net) = load_model(&model_of(args))?;
