@@ -28,8 +28,7 @@ use clap::Parser;
 use mvgrasp::dataset::photoreal::render_photoreal;
 use mvgrasp::geometry::objects::{Category, generate};
 use mvgrasp::geometry::{
-    Camera, HemisphereLayout, Intrinsics, IntrinsicsPreset, Pose3, RestingPoses, Rot3,
-    TriangleMesh, Vec3,
+    Camera, HemisphereLayout, Intrinsics, IntrinsicsPreset, Pose3, RestingPoses, Rot3, Vec3,
 };
 use mvgrasp::planner::{DepthPredictor, RgbInput, render_rgb};
 use mvgrasp::render::{Backend, Renderer};
@@ -145,15 +144,12 @@ fn write_sample(
         photo: false,
     };
     let photo = args.photo_share > 0.0 && rng.random_bool(args.photo_share);
-    let render = if photo { render_photo } else { render_flat };
-    let rendered = render(
-        renderer,
-        &object.mesh,
-        &pose.table_from_object,
-        &cameras,
-        &input,
-        rng.random(),
-    )
+    let (mesh, table_from_object, seed) = (&object.mesh, &pose.table_from_object, rng.random());
+    let rendered = if photo {
+        render_photoreal(renderer, mesh, table_from_object, &cameras, seed).map(|p| p.views)
+    } else {
+        render_rgb(renderer, mesh, table_from_object, &cameras, &input, seed)
+    }
     .map_err(|e| e.to_string())?;
     // Half the time the sweep sees the cameras as a calibration gives them: a little off.
     let calibration_error = rng.random_bool(0.5);
@@ -187,32 +183,6 @@ fn write_sample(
         written += 1;
     }
     Ok(written)
-}
-
-type Rendered = mvgrasp::Result<Vec<(RgbView, Vec<f32>)>>;
-
-/// The datasets' flat look: random colours under each camera's headlight.
-fn render_flat(
-    renderer: &Renderer,
-    mesh: &TriangleMesh,
-    table_from_object: &Pose3,
-    cameras: &[Camera],
-    input: &RgbInput,
-    seed: u64,
-) -> Rendered {
-    render_rgb(renderer, mesh, table_from_object, cameras, input, seed)
-}
-
-/// The photographic look (colours per vertex whatever `input` says).
-fn render_photo(
-    renderer: &Renderer,
-    mesh: &TriangleMesh,
-    table_from_object: &Pose3,
-    cameras: &[Camera],
-    _input: &RgbInput,
-    seed: u64,
-) -> Rendered {
-    render_photoreal(renderer, mesh, table_from_object, cameras, seed).map(|photo| photo.views)
 }
 
 /// `camera` moved by up to 2 mm and turned by up to 0.5 degrees, uniformly at random.

@@ -1,7 +1,9 @@
 //! The one place where geometry's types become the renderer's plain arrays.
 
 use mvgrasp_geometry::{Camera, Intrinsics, Mat3, Pose3, Rot3, TriangleMesh, Vec3};
-use mvgrasp_render::{Intrinsics as RenderIntrinsics, Sides, View};
+use mvgrasp_render::{Frame, Intrinsics as RenderIntrinsics, Sides, View};
+
+use crate::stereo::RgbView;
 
 /// Which sides of `mesh` to draw: front faces only for a closed surface wound outwards (no
 /// boundary edge, no neighbours wound against each other, positive signed volume), where back
@@ -56,6 +58,21 @@ pub fn render_view(camera: &Camera) -> View {
         intrinsics: render_intrinsics(&camera.intrinsics),
         camera_from_world: row_major(&camera.camera_from_world()),
     }
+}
+
+/// A rendered frame as the colour view of `camera` (its mask: the pixels of `object_id`) and
+/// its rendered depth, metres.
+pub fn rgb_view_of(camera: &Camera, frame: Frame, object_id: u8) -> (RgbView, Vec<f32>) {
+    let view = RgbView {
+        camera: *camera,
+        rgb: frame
+            .rgb
+            .chunks_exact(3)
+            .map(|p| [p[0], p[1], p[2]])
+            .collect(),
+        mask: Some(frame.mask.iter().map(|&m| m == object_id).collect()),
+    };
+    (view, frame.depth_m)
 }
 
 #[cfg(test)]

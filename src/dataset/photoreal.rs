@@ -15,7 +15,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
 use super::scene::{OBJECT_ID, SceneData, TABLE_HALF_SIDE_M, TABLE_ID, splitmix};
-use crate::convert::render_view;
+use crate::convert::{render_view, rgb_view_of};
 use crate::error::{Error, Result};
 use crate::stereo::RgbView;
 
@@ -346,20 +346,11 @@ pub fn render_photoreal(
     let frames = renderer.render_lit(&scene, &views, &look.lighting)?;
     let mut out = Vec::with_capacity(frames.len());
     for (camera, frame) in cameras.iter().zip(frames) {
-        let mut rgb: Vec<[u8; 3]> = frame
-            .rgb
-            .chunks_exact(3)
-            .map(|p| [p[0], p[1], p[2]])
-            .collect();
+        let (mut view, depth_m) = rgb_view_of(camera, frame, OBJECT_ID);
         let sensor = SensorLook::random(&mut rng);
         let k = &camera.intrinsics;
-        sensor.apply(&mut rgb, k.width as usize, k.height as usize, &mut rng)?;
-        let view = RgbView {
-            camera: *camera,
-            rgb,
-            mask: Some(frame.mask.iter().map(|&m| m == OBJECT_ID).collect()),
-        };
-        out.push((view, frame.depth_m));
+        sensor.apply(&mut view.rgb, k.width as usize, k.height as usize, &mut rng)?;
+        out.push((view, depth_m));
     }
     Ok(Photographed { look, views: out })
 }

@@ -11,7 +11,7 @@ use mvgrasp_grasp::{GraspLabel, GraspObject, Gripper, PaperGrasp, label_grasps};
 use mvgrasp_render::{Colors, Renderer, random_colors};
 use serde::Serialize;
 
-use crate::convert::render_view;
+use crate::convert::{render_view, rgb_view_of};
 use crate::dataset::photoreal::render_photoreal;
 use crate::dataset::{OBJECT_ID, SceneData, TABLE_HALF_SIDE_M, splitmix};
 use crate::error::Result;
@@ -285,18 +285,7 @@ pub fn render_rgb(
     Ok(cameras
         .iter()
         .zip(frames)
-        .map(|(camera, frame)| {
-            let view = RgbView {
-                camera: *camera,
-                rgb: frame
-                    .rgb
-                    .chunks_exact(3)
-                    .map(|p| [p[0], p[1], p[2]])
-                    .collect(),
-                mask: Some(frame.mask.iter().map(|&m| m == OBJECT_ID).collect()),
-            };
-            (view, frame.depth_m)
-        })
+        .map(|(camera, frame)| rgb_view_of(camera, frame, OBJECT_ID))
         .collect())
 }
 
