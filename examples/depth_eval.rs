@@ -6,7 +6,8 @@
 //!
 //! ```text
 //! cargo run --release --example depth_eval -- [--per-category 3] [--per-face] [--distance-m 0.5]
-//!     [--views 3,5,9] [--sweep-hull] [--photo]
+//!     [--views 3,5,9] [--sweep-hull] [--photo] [--methods lsm,sweep,mvs,refined]
+//!     [--refiner RUN/sweep_refiner_small.json]
 //! ```
 //!
 //! `--photo` renders the views with the photographic look (`mvgrasp::dataset::photoreal`:
@@ -23,7 +24,8 @@
 //! nearest surface; timed with the sweep, which makes it) and the learned multi-view stereo
 //! network (the shipped `models/mvs_small`, `mvs::mvs_depths`, every pixel kept whatever its
 //! confidence). Each row also gives the median error of the predicted pixels. The LSM's threads: rayon's pool
-//! (`RAYON_NUM_THREADS`), as the baseline's.
+//! (`RAYON_NUM_THREADS`), as the baseline's. `--methods` runs some of them (the hull comes with
+//! the sweep); `--refiner` scores a training run's export instead of the shipped refiner.
 
 use std::process::ExitCode;
 use std::time::Instant;
@@ -33,7 +35,7 @@ use mvgrasp::dataset::photoreal::render_photoreal;
 use mvgrasp::evaluate::depth::DepthErrors;
 use mvgrasp::geometry::objects::{Category, generate};
 use mvgrasp::geometry::{HemisphereLayout, Intrinsics, IntrinsicsPreset, RestingPoses};
-use mvgrasp::infer::Parallelism;
+use mvgrasp::infer::{Parallelism, SweepRefiner};
 use mvgrasp::lsm::lsm_depths;
 use mvgrasp::mvs::mvs_depths;
 use mvgrasp::planner::{DepthPredictor, RgbInput, models, render_rgb};
@@ -66,6 +68,20 @@ struct Args {
     /// The photographic look instead of the flat one (`--per-face` is then ignored).
     #[arg(long)]
     photo: bool,
+    /// The methods to run: lsm, sweep (with the visual hull), mvs, refined.
+    #[arg(long, value_delimiter = ',', default_values_t = Method::ALL.map(String::from))]
+    methods: Vec<String>,
+    /// A sweep refiner export's JSON (NAME.json beside NAME.safetensors, as
+    /// `mvgrasp_training.train_sweep_refiner --export` writes it) instead of the shipped one.
+    #[arg(long)]
+    refiner: Option<std::path::PathBuf>,
+}
+
+/// The methods' names on the command line, in the tables' order (the hull is the sweep's).
+struct Method;
+
+impl Method {
+    const ALL: [&str; 4] = ["lsm", "sweep", "mvs", "refined"];
 }
 
 /// `errors` as the table's cells: median, MAE, predicted, within 2 mm, within 5 mm,
@@ -99,6 +115,21 @@ fn run(args: &Args) -> Result<(), String> {
         per_face: args.per_face,
         photo: false,
     };
+    if let Some(unknown) = args.methods.iter().find(|m| !Method::ALL.contains(&m.as_str())) {
+        return Err(format!(
+            "--methods {unknown}: expected some of {}",
+            Method::ALL.join(", ")
+        ));
+    }
+    let runs = |method: &str| args.methods.iter().any(|m| m == method);
+    // [LSM, sweep, hull, MVS, refined]: the rows printed.
+    let shown = [
+        runs("lsm"),
+        runs("sweep"),
+        runs("sweep"),
+        runs("mvs"),
+        runs("refined"),
+    ];
     let lsm = models::LSM
         .load()
         .map_err(|e| e.to_string())?
@@ -107,14 +138,17 @@ fn run(args: &Args) -> Result<(), String> {
         .load()
         .map_err(|e| e.to_string())?
         .with_parallelism(Parallelism::all_threads());
+    let refiner_net = match &args.refiner {
+        Some(json) => SweepRefiner::load(json).map_err(|e| e.to_string())?,
+        None => models::SWEEP_REFINER.load().map_err(|e| e.to_string())?,
+    };
+    let refiner_name = match &args.refiner {
+        Some(json) => json.display().to_string(),
+        None => "sweep_refiner_small".to_string(),
+    };
     // Every pixel kept, as the default run's one-view planner gets them.
     let refined = RefinedSweep {
-        net: std::sync::Arc::new(
-            models::SWEEP_REFINER
-                .load()
-                .map_err(|e| e.to_string())?
-                .with_parallelism(Parallelism::all_threads()),
-        ),
+        net: std::sync::Arc::new(refiner_net.with_parallelism(Parallelism::all_threads())),
         min_confidence: 0.0,
         unsure: mvgrasp::sweep_refiner::Unsure::Missing,
     };
@@ -180,11 +214,15 @@ fn run(args: &Args) -> Result<(), String> {
             for (c, &n) in counts.iter().enumerate() {
                 let views: Vec<RgbView> = rendered[..n].iter().map(|(v, _)| v.clone()).collect();
                 let started = Instant::now();
-                let learnt = lsm_depths(&lsm, &views).map_err(|e| e.to_string())?;
+                let learnt = if shown[0] {
+                    lsm_depths(&lsm, &views).map_err(|e| e.to_string())?
+                } else {
+                    Vec::new()
+                };
                 seconds[c][0] += started.elapsed().as_secs_f64();
                 // One view: the LSM alone (stereo and carving need two).
                 let started = Instant::now();
-                let depths = if n >= 2 {
+                let depths = if n >= 2 && shown[1] {
                     sweep_depths(&views, &sweep).map_err(|e| e.to_string())?
                 } else {
                     Vec::new()
@@ -192,22 +230,22 @@ fn run(args: &Args) -> Result<(), String> {
                 seconds[c][1] += started.elapsed().as_secs_f64();
                 seconds[c][2] = seconds[c][1];
                 let started = Instant::now();
-                let stereo = if n >= 2 {
+                let stereo = if n >= 2 && shown[3] {
                     mvs_depths(&mvs, &views, 0.0).map_err(|e| e.to_string())?
                 } else {
                     Vec::new()
                 };
                 seconds[c][3] += started.elapsed().as_secs_f64();
                 let started = Instant::now();
-                let sharpened = if n >= 2 {
+                let sharpened = if n >= 2 && shown[4] {
                     refined.depths(&views).map_err(|e| e.to_string())?
                 } else {
                     Vec::new()
                 };
                 seconds[c][4] += started.elapsed().as_secs_f64();
-                for (i, (lsm, (view, truth))) in learnt.iter().zip(&rendered).enumerate() {
+                for (i, (view, truth)) in rendered[..n].iter().enumerate() {
                     let mask = view.mask.as_deref().unwrap_or(&[]);
-                    let mut methods = vec![(0, lsm)];
+                    let mut methods: Vec<_> = learnt.get(i).map(|d| (0, d)).into_iter().collect();
                     if let Some(swept) = depths.get(i) {
                         methods.extend([(1, &swept.depth_m), (2, &swept.hull_m)]);
                     }
@@ -262,14 +300,14 @@ fn run(args: &Args) -> Result<(), String> {
     println!("|---|---|---|---|---|---|---|---|---|---|");
     for (c, &n) in counts.iter().enumerate() {
         let methods = [
-            "LSM (lsm_small)",
-            "plane sweep in the hull",
-            "visual hull alone",
-            "MVS (mvs_small)",
-            "refined sweep (sweep_refiner_small)",
+            "LSM (lsm_small)".to_string(),
+            "plane sweep in the hull".to_string(),
+            "visual hull alone".to_string(),
+            "MVS (mvs_small)".to_string(),
+            format!("refined sweep ({refiner_name})"),
         ];
         for (m, method) in methods.iter().enumerate() {
-            if n < 2 && m > 0 {
+            if (n < 2 && m > 0) || !shown[m] {
                 continue;
             }
             for (s, scored) in ["top-down", "all"].iter().enumerate() {
@@ -282,6 +320,9 @@ fn run(args: &Args) -> Result<(), String> {
         }
     }
     for (network, name) in ["MVS", "refined sweep"].iter().enumerate() {
+        if !shown[3 + network] {
+            continue;
+        }
         println!(
             "\n{name}: confidence against error (object pixels of all views): the share within 5 mm"
         );
