@@ -115,7 +115,11 @@ fn run(args: &Args) -> Result<(), String> {
         per_face: args.per_face,
         photo: false,
     };
-    if let Some(unknown) = args.methods.iter().find(|m| !Method::ALL.contains(&m.as_str())) {
+    if let Some(unknown) = args
+        .methods
+        .iter()
+        .find(|m| !Method::ALL.contains(&m.as_str()))
+    {
         return Err(format!(
             "--methods {unknown}: expected some of {}",
             Method::ALL.join(", ")

@@ -228,7 +228,7 @@ pub fn write_overlay(
     grasps: &[ScoredGrasp],
 ) -> Result<()> {
     let (w, h) = (depth.width() as usize, depth.height() as usize);
-    let (near, far) = depth_span(depth.as_slice());
+    let (near, far) = depth_span(depth.as_slice(), None);
     let span = far - near;
     let mut rgb: Vec<u8> = depth
         .as_slice()
@@ -298,7 +298,8 @@ pub fn write_overlay(
 
 /// The picture of a plan from RGB views (`plan --out`: `views.png`): one column per view, its
 /// colour image above its depth (grey, near bright, missing black; the predicted depth for RGB
-/// input), both at half resolution, and the best five grasps drawn in every view where they
+/// input; with a mask the object on a bright scale of its own, the rest dim), both at half
+/// resolution, and the best five grasps drawn in every view where they
 /// project: the line between the contacts and each finger 3 cm back along the approach, in
 /// [`GRASP_COLORS`] (the best green, drawn last and thicker).
 ///
@@ -337,17 +338,25 @@ pub fn write_contact_sheet(
     let mut sheet = vec![0u8; 3 * sheet_w * sheet_h];
     for (col, (colour, view)) in rgb.iter().zip(views).enumerate() {
         let depth = view.depth.as_slice();
-        let (near, far) = depth_span(depth);
+        // With a mask, the object on a grey scale of its own (bright) and the rest dim.
+        let whole = depth_span(depth, None);
+        let object = view.mask.as_ref().map(|m| (m, depth_span(depth, Some(m))));
+        let grey = |d: f32, (near, far): (f32, f32), [dark, bright]: [f32; 2]| {
+            (dark + (bright - dark) * (1.0 - ((d - near) / (far - near)).clamp(0.0, 1.0))) as u8
+        };
         for y in 0..th {
             for x in 0..tw {
                 let at = (2 * y) * w + 2 * x;
                 let top = 3 * (y * sheet_w + col * tw + x);
                 sheet[top..top + 3].copy_from_slice(&colour.rgb[at]);
                 let d = depth[at];
-                let g = if d > 0.0 {
-                    (40.0 + 200.0 * (1.0 - ((d - near) / (far - near)).clamp(0.0, 1.0))) as u8
-                } else {
-                    0
+                let g = match object {
+                    _ if d <= 0.0 => 0,
+                    Some((mask, span)) if mask.at((2 * x) as i64, (2 * y) as i64) => {
+                        grey(d, span, [110.0, 250.0])
+                    }
+                    Some(_) => grey(d, whole, [30.0, 90.0]),
+                    None => grey(d, whole, [40.0, 240.0]),
                 };
                 let bottom = 3 * ((th + y) * sheet_w + col * tw + x);
                 sheet[bottom..bottom + 3].copy_from_slice(&[g, g, g]);
@@ -383,9 +392,20 @@ pub fn write_contact_sheet(
     write_png8(path, sheet_w as u32, sheet_h as u32, 3, &sheet)
 }
 
-/// The 2nd and 98th percentiles of the positive depths (the grey scale's ends).
-fn depth_span(depth: &[f32]) -> (f32, f32) {
-    let mut valid: Vec<f32> = depth.iter().copied().filter(|&d| d > 0.0).collect();
+/// The grey scale's ends: the 2nd and 98th percentiles of the positive depths, over the
+/// object's pixels where a mask is given, else over all.
+fn depth_span(depth: &[f32], mask: Option<&mvgrasp_planner::Mask>) -> (f32, f32) {
+    let width = mask.map_or(1, |m| m.width() as usize);
+    let on_object = |i: usize| mask.is_none_or(|m| m.at((i % width) as i64, (i / width) as i64));
+    let mut valid: Vec<f32> = depth
+        .iter()
+        .enumerate()
+        .filter(|&(i, &d)| d > 0.0 && on_object(i))
+        .map(|(_, &d)| d)
+        .collect();
+    if valid.is_empty() {
+        valid = depth.iter().copied().filter(|&d| d > 0.0).collect();
+    }
     valid.sort_by(f32::total_cmp);
     let at = |q: f64| {
         valid
@@ -428,5 +448,74 @@ fn draw_line(
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sensor_files::read_rgb;
+    use mvgrasp_geometry::{Intrinsics, Vec3};
+    use mvgrasp_planner::{DepthImage, Mask, View};
+
+    #[test]
+    fn the_contact_sheet_draws_the_object_on_its_own_bright_scale() {
+        // A 64 x 48 camera 0.7 m above the table; a 20 x 16 px object 5 to 6.5 cm tall (its
+        // left columns nearest), and the table 0.70 m away.
+        let k = Intrinsics {
+            fx: 60.0,
+            fy: 60.0,
+            cx: 31.5,
+            cy: 23.5,
+            width: 64,
+            height: 48,
+            z_near_m: 0.1,
+            z_far_m: 2.0,
+        };
+        let camera = Camera::look_at(
+            k,
+            Vec3::new(0.0, 0.0, 0.7),
+            Vec3::ZERO,
+            Vec3::new(0.0, -1.0, 0.0),
+        )
+        .unwrap();
+        let on_object = |u: usize, v: usize| (22..42).contains(&u) && (16..32).contains(&v);
+        let (mut depth, mut mask) = (Vec::new(), Vec::new());
+        for v in 0..48 {
+            for u in 0..64 {
+                let object = on_object(u, v);
+                depth.push(if object {
+                    0.635 + 0.0008 * (u - 22) as f32
+                } else {
+                    0.7
+                });
+                mask.push(object);
+            }
+        }
+        let view = View::new(0, camera, DepthImage::new(k, depth).unwrap())
+            .unwrap()
+            .with_mask(Mask::new(64, 48, mask.clone()).unwrap())
+            .unwrap();
+        let rgb = crate::stereo::RgbView {
+            camera,
+            rgb: vec![[90, 120, 150]; 64 * 48],
+            mask: Some(mask),
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("views.png");
+        write_contact_sheet(&path, &[rgb], &[view], &[]).unwrap();
+        let (w, h, sheet) = read_rgb(&path).unwrap();
+        assert_eq!((w, h), (32, 48));
+        // The depth row: the sheet's lower half, at half resolution.
+        let grey = |x: usize, y: usize| sheet[(24 + y) * 32 + x][0];
+        let (table, nearest, farthest) = (grey(2, 2), grey(11, 12), grey(20, 12));
+        assert!(table <= 90, "the table dim: {table}");
+        assert!(farthest >= 110, "the object's far side bright: {farthest}");
+        assert!(
+            nearest > farthest + 100,
+            "the object's own span: {nearest} vs {farthest}"
+        );
+        // The colour row above, unchanged.
+        assert_eq!(sheet[2 * 32 + 2], [90, 120, 150]);
     }
 }
