@@ -277,6 +277,30 @@ fn plan_says_why_it_returns_no_grasp() {
     );
 }
 
+/// The default run's grasp carries its chance to hold; `--min-probability` above it answers
+/// no grasp (exit code 3) with that chance, at 0 the grasp is returned.
+#[test]
+fn plan_answers_no_grasp_below_the_chance_asked_for() {
+    let text = plan_text(&["--no-physics"]);
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("chance to hold: "))
+        .unwrap_or_else(|| panic!("{text}"));
+    let chance: f32 = line["chance to hold: ".len()..][..4].parse().unwrap();
+    assert!((0.0..=1.0).contains(&chance), "{line}");
+    assert!(plan_text(&["--no-physics", "--min-probability", "0"]).contains(line));
+    let above = format!("{:.2}", (chance + 0.01).min(1.0));
+    let out = plan(&["--no-physics", "--min-probability", &above]);
+    assert_eq!(out.status.code(), Some(3));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains(&format!(
+            "no grasp reaches a chance of {above} to hold: the best's is {chance:.2}"
+        )),
+        "{text}"
+    );
+}
+
 #[test]
 fn plan_reports_bad_input_in_one_line_and_exits_2() {
     for args in [
@@ -289,6 +313,8 @@ fn plan_reports_bad_input_in_one_line_and_exits_2() {
         &["--views", "0"][..],
         &["--views", "11"][..],
         &["--distance-m", "0"][..],
+        &["--min-probability", "1.5"][..],
+        &["--fuse", "--min-probability", "0.5"][..],
     ] {
         let out = plan(args);
         assert_eq!(out.status.code(), Some(2), "{args:?}");

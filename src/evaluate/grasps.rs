@@ -6,7 +6,7 @@
 use mvgrasp_geometry::{Pose3, RestingPoses, Vec3};
 use mvgrasp_grasp::physics::{FailureStage, PhysicsObject};
 use mvgrasp_grasp::{AnalysisConfig, GraspObject, Gripper, analyse, label_grasps};
-use mvgrasp_planner::tilt_rad;
+use mvgrasp_planner::{DepthSource, HoldProbability, tilt_rad};
 use mvgrasp_render::Renderer;
 use serde::{Deserialize, Serialize};
 
@@ -241,6 +241,10 @@ pub struct GraspRecord {
     pub outcome: String,
     /// The returned grasp's predicted quality.
     pub quality: Option<f32>,
+    /// The returned grasp's chance to hold ([`HoldProbability`]), for the policies that have
+    /// one (`rgb`, `depth`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub probability: Option<f32>,
     /// Dex-Net 2.0's analytic label of the returned grasp on the true mesh.
     pub robust: Option<bool>,
     /// The approach's angle from straight down, degrees.
@@ -337,10 +341,20 @@ impl ReadyPolicy {
             seed,
             outcome,
             quality: best.map(|b| b.quality),
+            probability: match (best, self.hold_source()) {
+                (Some(b), Some(source)) => Some(HoldProbability::shipped()?.of(b.quality, source)),
+                _ => None,
+            },
             robust: report.analytic.map(|a| a.robust),
             tilt_deg: best.map(|b| tilt_rad(&b.grasp).to_degrees()),
             grasp: best.map(|b| b.grasp),
         })
+    }
+
+    /// The depth source whose hold probability applies to this policy's grasps, if any.
+    fn hold_source(&self) -> Option<DepthSource> {
+        let options = &self.policy.options;
+        options.hold_source(options.default_model(), false)
     }
 
     /// The gripper the policy plans for.

@@ -386,7 +386,8 @@ fn calibration_table(md: &mut String, results: &Results) {
         "\n### Calibration (the returned grasp's predicted quality against held)\n\nPer bin of \
          predicted quality: grasps returned and tried, their mean quality, the share that held. \
          ECE: the expected calibration error, the bins' |mean quality - share held| weighted \
-         by their grasps.\n"
+         by their grasps. \"Chance to hold\": the quality mapped to the trial's outcomes on the \
+         development set (models/probability_topdown.json), binned the same way.\n"
     );
     let mut header = String::from("| policy |");
     let mut lower = 0.0;
@@ -400,36 +401,54 @@ fn calibration_table(md: &mut String, results: &Results) {
         "---|".repeat(QUALITY_BINS.len())
     );
     for (name, ..) in &results.policies {
-        // (grasps, quality sum, held) per bin
-        let mut bins = [(0usize, 0.0f64, 0usize); QUALITY_BINS.len()];
-        for r in results
-            .grasps
-            .iter()
-            .filter(|r| &r.policy == name && r.counts())
-        {
-            let Some(q) = r.quality else { continue };
-            let bin = QUALITY_BINS
+        let of_policy = || {
+            results
+                .grasps
                 .iter()
-                .position(|&upper| q < upper)
-                .unwrap_or(QUALITY_BINS.len() - 1);
-            bins[bin].0 += 1;
-            bins[bin].1 += f64::from(q);
-            bins[bin].2 += usize::from(r.held());
+                .filter(move |r| &r.policy == name && r.counts())
+        };
+        calibration_row(
+            md,
+            name,
+            of_policy().filter_map(|r| Some((r.quality?, r.held()))),
+        );
+        if of_policy().any(|r| r.probability.is_some()) {
+            calibration_row(
+                md,
+                &format!("{name}, chance to hold"),
+                of_policy().filter_map(|r| Some((r.probability?, r.held()))),
+            );
         }
-        let total: usize = bins.iter().map(|b| b.0).sum();
-        let mut ece = 0.0;
-        let mut row = format!("| {name} |");
-        for &(n, quality, held) in &bins {
-            if n == 0 {
-                row.push_str(" - |");
-                continue;
-            }
-            let (mean, rate) = (quality / n as f64, held as f64 / n as f64);
-            ece += n as f64 / total.max(1) as f64 * (mean - rate).abs();
-            let _ = write!(row, " {n}: {mean:.2} / {:.0}% |", 100.0 * rate);
-        }
-        let _ = writeln!(md, "{row} {:.1} points |", 100.0 * ece);
     }
+}
+
+/// One row of the calibration table: `graded` (predicted, held) in [`QUALITY_BINS`], and the
+/// expected calibration error.
+fn calibration_row(md: &mut String, name: &str, graded: impl Iterator<Item = (f32, bool)>) {
+    // (grasps, predicted sum, held) per bin
+    let mut bins = [(0usize, 0.0f64, 0usize); QUALITY_BINS.len()];
+    for (q, held) in graded {
+        let bin = QUALITY_BINS
+            .iter()
+            .position(|&upper| q < upper)
+            .unwrap_or(QUALITY_BINS.len() - 1);
+        bins[bin].0 += 1;
+        bins[bin].1 += f64::from(q);
+        bins[bin].2 += usize::from(held);
+    }
+    let total: usize = bins.iter().map(|b| b.0).sum();
+    let mut ece = 0.0;
+    let mut row = format!("| {name} |");
+    for &(n, quality, held) in &bins {
+        if n == 0 {
+            row.push_str(" - |");
+            continue;
+        }
+        let (mean, rate) = (quality / n as f64, held as f64 / n as f64);
+        ece += n as f64 / total.max(1) as f64 * (mean - rate).abs();
+        let _ = write!(row, " {n}: {mean:.2} / {:.0}% |", 100.0 * rate);
+    }
+    let _ = writeln!(md, "{row} {:.1} points |", 100.0 * ece);
 }
 
 /// The depth suite's tables: per set, the seed paper's Table 1 layout for every method.

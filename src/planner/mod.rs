@@ -10,9 +10,9 @@ pub mod rgb;
 pub mod sensor;
 
 pub use mvgrasp_planner::{
-    CemParams, DepthImage, Fusion, FusionParams, GqcnnPolicy, ImageSamplerParams, Mask, Occupancy,
-    Plan, ScoredGrasp, ShippedModel, View, ViewSetting, VirtualScorer, VirtualViewParams, models,
-    sample_image_grasps, theta_rad,
+    CemParams, DepthImage, DepthSource, Fusion, FusionParams, GqcnnPolicy, HoldProbability,
+    ImageSamplerParams, Mask, Occupancy, Plan, ScoredGrasp, ShippedModel, View, ViewSetting,
+    VirtualScorer, VirtualViewParams, models, sample_image_grasps, theta_rad,
 };
 pub use options::{FUSED_VIEWS, PlanOptions};
 pub use pipeline::{

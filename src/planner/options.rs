@@ -7,7 +7,9 @@
 use mvgrasp_geometry::{Intrinsics, IntrinsicsPreset};
 use mvgrasp_grasp::Gripper;
 use mvgrasp_infer::Gqcnn;
-use mvgrasp_planner::{CemParams, FusionParams, GqcnnPolicy, ViewSetting, VirtualScorer, models};
+use mvgrasp_planner::{
+    CemParams, DepthSource, FusionParams, GqcnnPolicy, ViewSetting, VirtualScorer, models,
+};
 
 use crate::error::{Error, Result};
 use crate::planner::{DepthFrom, DepthPredictor, PlanParams, RgbInput, SensorPlanParams};
@@ -72,6 +74,29 @@ impl Default for PlanOptions {
 }
 
 impl PlanOptions {
+    /// The depth source whose hold probability ([`mvgrasp_planner::HoldProbability`]) applies to the grasps of
+    /// these options planned with the shipped top-down GQ-CNN (`model`: the network's name):
+    /// on a mesh, the settings it was fitted with (one top-down view 0.7 m away, the default
+    /// camera, no fusion, no CEM, the flat look) on rendered depth or the plane sweep's;
+    /// `sensor`: a depth camera's image, planned without fusion or CEM. `None` otherwise.
+    pub fn hold_source(&self, model: &str, sensor: bool) -> Option<DepthSource> {
+        let planner = model == models::GQCNN_TOPDOWN.name && !self.fuse && !self.cem;
+        if !planner {
+            return None;
+        }
+        if sensor {
+            return Some(DepthSource::Camera);
+        }
+        let views = self.views.is_none() && self.distance_m.is_none() && !self.photo;
+        let camera = self.camera == IntrinsicsPreset::PhoxiS;
+        match self.depth_from {
+            _ if !(views && camera) => None,
+            None => Some(DepthSource::Camera),
+            Some(DepthFrom::Baseline) => Some(DepthSource::Sweep),
+            Some(_) => None,
+        }
+    }
+
     /// The shipped network these options plan with when none is named: the multi-view GQ-CNN
     /// when fusing (it proposes every view's candidates), else the top-down GQ-CNN.
     pub fn default_model(&self) -> &'static str {

@@ -2,7 +2,8 @@
 # Reproduces the shipped networks of models/ from a clean clone: the grasp and RGB-D datasets
 # they were trained on (training/configs/datasets/, `render`), the five training runs
 # (training/configs/), the exports copied into models/ and the torch-parity fixtures of the
-# Rust tests rewritten, then the fused planner's ranker (training/scripts/fit_ranker.py).
+# Rust tests rewritten, then the fused planner's ranker (training/scripts/fit_ranker.py) and the
+# top-down planner's chance to hold (training/scripts/fit_probability.py).
 #
 #   training/scripts/reproduce_shipped_models.sh            # about five hours on a 2-core CPU
 #   QUICK=1 training/scripts/reproduce_shipped_models.sh    # minutes: 1 object per category,
@@ -153,6 +154,25 @@ for set in "fit 60 $((per_category / 2))" "dev 50 $((per_category / 4))"; do
 done
 "$python" training/scripts/fit_ranker.py "$data/ranker/fit.jsonl" \
     --validate "$data/ranker/dev.jsonl" --out "$ranker_out"
+
+# The top-down planner's chance to hold (training/scripts/fit_probability.py): the default run
+# and the same planner on rendered depth over the development set (built-in objects 50 to 54
+# of each category, every resting pose, seeds 0 to 2; with the networks and the ranker now
+# compiled into evaluate), a logistic map of the quality to the trial's outcome. About 20
+# minutes here.
+probability_out=$runs/probability_topdown.json
+[[ $quick == 1 ]] || probability_out=models/probability_topdown.json
+probability_seeds=0,1,2
+min_grasps=20
+if [[ $quick == 1 ]]; then probability_seeds=0; min_grasps=2; fi
+cargo build --release --quiet --bin evaluate
+rm -rf "$runs/probability_dev"
+target/release/evaluate --out "$runs/probability_dev" --set dev \
+    --per-category "$(( per_category / 4 > 0 ? per_category / 4 : 1 ))" \
+    --seeds "$probability_seeds" --all-poses --policy rgb --policy depth --suite grasps --plain \
+    > "$runs/probability_dev.log"
+"$python" training/scripts/fit_probability.py "$runs/probability_dev/records.jsonl" \
+    --out "$probability_out" --min-grasps "$min_grasps"
 
 if [[ $quick == 1 ]]; then
     echo "QUICK=1: exports in $runs (models/ unchanged)"

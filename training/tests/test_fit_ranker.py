@@ -2,24 +2,19 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
 from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import load_script
 
-SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "fit_ranker.py"
 
 
 @pytest.fixture(scope="module")
 def fit_ranker():
-    spec = importlib.util.spec_from_file_location("fit_ranker", SCRIPT)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("fit_ranker")
 
 
 def test_features_are_the_rust_rankers(fit_ranker):

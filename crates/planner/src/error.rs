@@ -75,3 +75,40 @@ pub enum PlannerError {
 
 /// `Result` with [`PlannerError`].
 pub type Result<T, E = PlannerError> = std::result::Result<T, E>;
+
+impl PlannerError {
+    /// [`PlannerError::File`] naming `path`.
+    pub(crate) fn file(path: &std::path::Path, detail: String) -> Self {
+        Self::File {
+            path: path.to_path_buf(),
+            detail,
+        }
+    }
+}
+
+/// A small model file's JSON (`what`: "ranker", "probability"), refused unless `format_of` it
+/// is `format`; errors name `path`.
+pub(crate) fn parse_tagged<T: serde::de::DeserializeOwned>(
+    text: &str,
+    path: &std::path::Path,
+    what: &str,
+    format: &str,
+    format_of: fn(&T) -> &str,
+) -> Result<T> {
+    let file: T = serde_json::from_str(text).map_err(|e| {
+        PlannerError::file(
+            path,
+            format!(
+                "not a {what} file: {}",
+                mvgrasp_geometry::one_line(&e.to_string())
+            ),
+        )
+    })?;
+    if format_of(&file) != format {
+        return Err(PlannerError::file(
+            path,
+            format!("format {:?}, expected {format:?}", format_of(&file)),
+        ));
+    }
+    Ok(file)
+}

@@ -12,7 +12,7 @@
 
 use serde::Deserialize;
 
-use crate::error::{PlannerError, Result};
+use crate::error::{PlannerError, Result, parse_tagged};
 use crate::policy::ScoredGrasp;
 use crate::virtual_view::tilt_rad;
 
@@ -60,22 +60,11 @@ impl Ranker {
     /// [`PlannerError::File`] naming `path` for malformed JSON, another format, features
     /// other than [`FEATURES`] or weights that are not finite.
     pub fn from_json(text: &str, path: &std::path::Path) -> Result<Self> {
-        let error = |detail: String| PlannerError::File {
-            path: path.to_path_buf(),
-            detail,
-        };
-        let file: RankerFile = serde_json::from_str(text).map_err(|e| {
-            error(format!(
-                "not a ranker file: {}",
-                mvgrasp_geometry::one_line(&e.to_string())
-            ))
-        })?;
-        if file.format != RANKER_FORMAT {
-            return Err(error(format!(
-                "format {:?}, expected {RANKER_FORMAT:?}",
-                file.format
-            )));
-        }
+        let error = |detail: String| PlannerError::file(path, detail);
+        let file: RankerFile =
+            parse_tagged(text, path, "ranker", RANKER_FORMAT, |f: &RankerFile| {
+                &f.format
+            })?;
         if file.features != FEATURES {
             return Err(error(format!(
                 "features {:?}, expected {FEATURES:?}",

@@ -26,9 +26,9 @@ use mvgrasp::grasps_file::{GraspsFile, write_contact_sheet, write_overlay};
 use mvgrasp::infer::Gqcnn;
 use mvgrasp::mcap_log::write_plan_log;
 use mvgrasp::planner::{
-    DepthFrom, DepthPredictor, GqcnnPolicy, ObjectSource, PlanOptions, PlanParams, PlanReport,
-    ScoredGrasp, SensorFiles, SensorPlanParams, View, models, plan_grasp, plan_on_rgb_dir,
-    plan_on_sensor_depth, plan_on_views_dir,
+    DepthFrom, DepthPredictor, DepthSource, GqcnnPolicy, HoldProbability, ObjectSource,
+    PlanOptions, PlanParams, PlanReport, ScoredGrasp, SensorFiles, SensorPlanParams, View, models,
+    plan_grasp, plan_on_rgb_dir, plan_on_sensor_depth, plan_on_views_dir,
 };
 use mvgrasp::render::{Backend, Renderer};
 use mvgrasp::{ObjectReport, ReportParams};
@@ -74,6 +74,12 @@ struct Args {
     /// Skip the physics trial of the chosen grasp.
     #[arg(long)]
     no_physics: bool,
+    /// Answer "no grasp" (exit code 3, the outputs still written) unless the best grasp's
+    /// chance to hold reaches this (0 to 1): the top-down GQ-CNN's quality mapped to the
+    /// trial's outcomes (`models/probability_topdown.json`), for the default run's settings on
+    /// the plane sweep's or rendered depth, and for a depth camera's image
+    #[arg(long)]
+    min_probability: Option<f32>,
     /// Return the best-scored grasp without checking the open hand against the observed depth.
     #[arg(long)]
     no_hand_check: bool,
@@ -164,9 +170,56 @@ struct Report<'a> {
     /// `lsm`, `baseline` or `rendered`: the depth planned on.
     depth_from: &'a str,
     plan: &'a PlanReport,
+    /// The best grasp's chance to hold ([`HoldProbability`]), where this planner has one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    hold_probability: Option<f32>,
     /// With depth from RGB: the same run on the rendered (true) depth.
     #[serde(skip_serializing_if = "Option::is_none")]
     on_rendered_depth: Option<&'a PlanReport>,
+}
+
+/// The best grasp's chance to hold, planned on `source` (`None`: this planner has no map).
+fn hold_probability(
+    best: Option<&ScoredGrasp>,
+    source: Option<DepthSource>,
+) -> Result<Option<f32>, String> {
+    let (Some(best), Some(source)) = (best, source) else {
+        return Ok(None);
+    };
+    let map = HoldProbability::shipped().map_err(|e| e.to_string())?;
+    Ok(Some(map.of(best.quality, source)))
+}
+
+/// `--min-probability`: checked before planning (a value in [0, 1], and a planner with a
+/// map); after it, whether the best grasp reaches it, with a line saying why not.
+fn check_min_probability(
+    args: &Args,
+    source: Option<DepthSource>,
+    chance: Option<f32>,
+) -> Result<(bool, String), String> {
+    let Some(min) = args.min_probability else {
+        return Ok((true, String::new()));
+    };
+    if !(0.0..=1.0).contains(&min) {
+        return Err(format!(
+            "--min-probability {min}: expected a chance from 0 to 1"
+        ));
+    }
+    if source.is_none() {
+        return Err(
+            "--min-probability: only the top-down GQ-CNN with the default run's \
+                    settings (on the plane sweep's or rendered depth) or on a depth camera's \
+                    image has a chance to hold"
+                .into(),
+        );
+    }
+    Ok(match chance {
+        Some(p) if p < min => (
+            false,
+            format!("no grasp reaches a chance of {min:.2} to hold: the best's is {p:.2}\n"),
+        ),
+        _ => (true, String::new()),
+    })
 }
 
 /// Plans; `Ok(false)` when no grasp was found.
@@ -207,6 +260,8 @@ fn run(args: &Args) -> Result<bool, String> {
         ..options_of(args)
     };
     let (model_name, net) = load_model(&model_of(args))?;
+    let source = options.hold_source(&model_name, false);
+    check_min_probability(args, source, None)?;
     let (policy, params) = options.on_mesh(net).map_err(|e| e.to_string())?;
     let backend = Backend::parse(&args.backend).ok_or_else(|| {
         format!(
@@ -228,12 +283,15 @@ fn run(args: &Args) -> Result<bool, String> {
         None => None,
     };
     let depth_from = options.depth_from.map_or("rendered", DepthFrom::name);
+    let chance = hold_probability(plan.best.as_ref(), source)?;
+    let (reaches, verdict) = check_min_probability(args, source, chance)?;
     if args.json {
         let report = Report {
             object: &description,
             model: &model_name,
             depth_from,
             plan: &plan,
+            hold_probability: chance,
             on_rendered_depth: on_truth.as_ref(),
         };
         let json = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
@@ -250,9 +308,11 @@ fn run(args: &Args) -> Result<bool, String> {
                 (options.fuse, params.plan_views)
             )
         );
+        print!("{}", chance_words(chance));
         if let (Some(from), Some(truth)) = (options.depth_from, &on_truth) {
             print!("{}", truth_comparison(from, &plan, truth));
         }
+        print!("{verdict}");
     }
     if let Some(out) = &args.out {
         write_outputs(
@@ -267,7 +327,17 @@ fn run(args: &Args) -> Result<bool, String> {
                 .map_err(|e| e.to_string())?;
         }
     }
-    Ok(plan.best.is_some())
+    Ok(plan.best.is_some() && reaches)
+}
+
+/// The summary's line on the best grasp's chance to hold (none without one).
+fn chance_words(chance: Option<f32>) -> String {
+    chance.map_or_else(String::new, |p| {
+        format!(
+            "chance to hold: {p:.2} (the quality mapped to the trial's outcomes on the \
+             development set: models/probability_topdown.json)\n"
+        )
+    })
 }
 
 /// Writes `grasps.json` and, for each of `views`, a picture of `grasps` over its depth
@@ -343,6 +413,8 @@ fn sensor_setup(
 /// `plan --depth`: a grasp on a sensor's depth image; `Ok(false)` when none was found.
 fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<bool, String> {
     let (model_name, policy, gripper, params) = sensor_setup(args)?;
+    let source = options_of(args).hold_source(&model_name, true);
+    check_min_probability(args, source, None)?;
     let files = SensorFiles {
         depth: depth.to_path_buf(),
         intrinsics: args.intrinsics.clone().unwrap_or_default(),
@@ -352,21 +424,25 @@ fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<bool, String> {
     let report =
         plan_on_sensor_depth(&policy, &gripper, &files, &params).map_err(|e| e.to_string())?;
     let file = GraspsFile::of_sensor(&report);
+    let chance = hold_probability(report.best.as_ref(), source)?;
+    let (reaches, verdict) = check_min_probability(args, source, chance)?;
     if args.json {
         println!("{}", file.to_json().map_err(|e| e.to_string())?);
     } else {
         print!("{}", sensor_summary(&model_name, &files, &report));
+        print!("{}{verdict}", chance_words(chance));
     }
     if let Some(out) = &args.out {
         write_outputs(out, &file, std::slice::from_ref(&report.view), &report.top)?;
     }
-    Ok(report.best.is_some())
+    Ok(report.best.is_some() && reaches)
 }
 
 /// `plan --views-dir`: a grasp over a folder of views; `Ok(false)` when none was found.
 fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
     use std::fmt::Write;
     let (model_name, policy, gripper, params) = sensor_setup(args)?;
+    check_min_probability(args, None, None)?;
     let (report, depth) = if args.rgb.is_some() {
         let from = depth_from_of(args)?.unwrap_or(DepthFrom::DEFAULT);
         let predictor = DepthPredictor::shipped(from).map_err(|e| e.to_string())?;
