@@ -701,6 +701,7 @@ fn dump_rescored(
             "view": c.view,
             "theta_rad": c.theta_rad,
             "by_scorer": c.by_scorer,
+            "from_cloud": c.from_cloud,
             "tilt_deg": tilt_deg,
             "width_m": c.grasp.width_m,
             "z_m": c.grasp.world_from_gripper.translation.z,

@@ -4,8 +4,8 @@
 
 use mvgrasp::grasps_file::GraspsFile;
 use mvgrasp::planner::{
-    DepthFrom, DepthImage, DepthPredictor, Mask, PlanOptions, View, plan_grasp, plan_on_rgb_views,
-    plan_on_view, plan_on_views,
+    DepthFrom, DepthImage, DepthPredictor, HoldProbability, Mask, PlanOptions, View, plan_grasp,
+    plan_on_rgb_views, plan_on_view, plan_on_views,
 };
 use mvgrasp::stereo::RgbView;
 use mvgrasp_geometry::{Camera, Pose3};
@@ -185,8 +185,9 @@ pub(crate) fn plan_views<'py>(
 /// Plans a grasp on a mesh, as `plan --mesh` does: the object rests on the table in a stable
 /// pose, its depth is rendered from the cameras, the policy plans, and the chosen grasp is
 /// checked analytically and (with `physics`) in the rapier trial. Returns
-/// `{"report": ..., "grasps_json": ..., "timings": ...}`: `plan --json`'s plan report, the
-/// text of the `grasps.json` that `plan --out` writes, and each stage's seconds.
+/// `{"report": ..., "grasps_json": ..., "timings": ..., "hold_probability": ...}`: `plan
+/// --json`'s plan report, the text of the `grasps.json` that `plan --out` writes, each stage's
+/// seconds, and the best grasp's chance to hold where the planner has one (else `None`).
 #[pyfunction]
 #[pyo3(signature = (vertices, triangles, *, model = None, fuse = false, cem = false, hand_check = true, seed = 0, camera = "phoxi_s", views = None, distance_m = None, stable_pose = 0, physics = true, backend = "auto", depth_from = "rendered"))]
 #[allow(clippy::too_many_arguments)]
@@ -226,6 +227,7 @@ pub(crate) fn plan_mesh<'py>(
         ..options(fuse, cem, hand_check, seed)
     };
     let backend = backend_of(backend)?;
+    let source = options.hold_source(model.unwrap_or(options.default_model()), false);
     let net = network(model, &options)?;
     let (policy, params) = options.on_mesh(net).map_err(pipeline_error)?;
     let report = py
@@ -239,9 +241,17 @@ pub(crate) fn plan_mesh<'py>(
     let timings = serde_json::json!({
         "render_s": t.render_s, "depth_s": t.depth_s, "fuse_s": t.fuse_s, "plan_s": t.plan_s, "check_s": t.check_s,
     });
+    let hold_probability = match (report.best.as_ref(), source) {
+        (Some(best), Some(source)) => Some(
+            HoldProbability::shipped()
+                .map_err(|e| pipeline_error(e.into()))?
+                .of(best.quality, source),
+        ),
+        _ => None,
+    };
     let result = to_python(
         py,
-        &serde_json::json!({"report": report, "timings": timings}),
+        &serde_json::json!({"report": report, "timings": timings, "hold_probability": hold_probability}),
     )?;
     result.set_item("grasps_json", file.to_json().map_err(pipeline_error)?)?;
     Ok(result)

@@ -87,6 +87,15 @@ def test_planning_on_a_mesh_matches_the_cli_and_checks_in_physics(tmp_path: Path
     default = mvgrasp.Planner().plan_mesh(vertices, triangles, physics=False,
                                           depth_from="baseline")  # fmt: skip
     assert default.grasps_json.encode() == (tmp_path / "rgb" / "grasps.json").read_bytes()
+    # The chance to hold is the CLI's, for the planners that have one.
+    shown = json.loads(subprocess.run(
+        ["cargo", "run", "--quiet", "--profile", "dist", "--bin", "plan", "--",
+         "--category", "box", "--no-physics", "--json"],
+        cwd=REPO_ROOT, check=True, capture_output=True, text=True,
+    ).stdout)  # fmt: skip
+    assert default.hold_probability is not None and 0.0 < default.hold_probability < 1.0
+    assert default.hold_probability == pytest.approx(shown["hold_probability"], abs=1e-6)
+    assert result.hold_probability is not None and fused.hold_probability is None
     learnt = mvgrasp.Planner().plan_mesh(vertices, triangles, physics=False, depth_from="lsm")
     assert learnt.timings["depth_s"] > 0 and len(learnt.views) == 5
     assert learnt.grasps and all(g.view == 0 for g in learnt.grasps)

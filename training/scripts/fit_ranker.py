@@ -33,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-FORMAT = "mvgrasp-ranker/1"
+FORMAT = "mvgrasp-ranker/2"
 FEATURES = [
     "bias",
     "logit_quality",
@@ -43,6 +43,7 @@ FEATURES = [
     "by_scorer",
     "width",
     "height",
+    "from_cloud",
 ]
 SCORE_FLOOR = 1e-4
 FOLDS = 5
@@ -69,6 +70,7 @@ def features(row: dict, table_z_m: float = 0.0) -> list[float]:
         1.0 if row["by_scorer"] else 0.0,
         row["width_m"] / 0.05,
         (row["z_m"] - table_z_m) / 0.05,
+        1.0 if row.get("from_cloud") else 0.0,
     ]
 
 

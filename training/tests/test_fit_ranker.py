@@ -28,7 +28,7 @@ def test_features_are_the_rust_rankers(fit_ranker):
         "z_m": 0.03,
     }
     got = fit_ranker.features(row)
-    want = [1.0, math.log(99.0), math.log(9.0), 0.0, 0.0, 0.0, 0.8, 0.6]
+    want = [1.0, math.log(99.0), math.log(9.0), 0.0, 0.0, 0.0, 0.8, 0.6, 0.0]
     assert got == pytest.approx(want)
     # A dump made with a ranker: the re-score is `virtual_quality`, `quality` the ranking.
     ranked = dict(row, quality=0.5, virtual_quality=0.99)
@@ -52,6 +52,7 @@ def synthetic_dump(path: Path, features, weights: np.ndarray, objects: int, seed
                     "by_scorer": bool(rng.random() < 0.3),
                     "width_m": float(rng.uniform(0.01, 0.08)),
                     "z_m": float(rng.uniform(0.005, 0.1)),
+                    "from_cloud": bool(rng.random() < 0.3),
                 }
                 p = 1.0 / (1.0 + math.exp(-float(np.dot(weights, features(row)))))
                 row["held"] = bool(rng.random() < p)
@@ -63,18 +64,18 @@ def synthetic_dump(path: Path, features, weights: np.ndarray, objects: int, seed
 
 
 def test_the_fit_recovers_a_known_model_and_writes_the_rankers_file(fit_ranker, tmp_path):
-    truth = np.array([0.5, 1.0, 0.0, -1.5, 0.0, 1.0, -0.5, -0.5])
+    truth = np.array([0.5, 1.0, 0.0, -1.5, 0.0, 1.0, -0.5, -0.5, 0.8])
     dump = tmp_path / "fit.jsonl"
     synthetic_dump(dump, fit_ranker.features, truth, objects=150, seed=1)
     out = tmp_path / "ranker.json"
     assert fit_ranker.main([str(dump), "--validate", str(dump), "--out", str(out)]) == 0
     written = json.loads(out.read_text())
-    assert written["format"] == "mvgrasp-ranker/1"
+    assert written["format"] == "mvgrasp-ranker/2"
     assert written["features"] == fit_ranker.FEATURES
     w = np.array(written["weights"])
     # The strong effects come back with their signs, near their sizes (the tilt's through its
     # two terms together, at 45 degrees: they trade off against each other).
-    for i in (1, 5):
+    for i in (1, 5, 8):
         assert abs(w[i] - truth[i]) < 0.5, (i, w)
     assert abs((w[3] + w[4]) - (truth[3] + truth[4])) < 0.5, w
     training = written["training"]

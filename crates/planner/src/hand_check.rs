@@ -113,7 +113,9 @@ pub fn check_hand(
     fusion: Option<&Fusion>,
     gripper: &Gripper,
 ) -> Option<Rejection> {
-    if let Some(view) = views.get(candidate.view) {
+    if !candidate.from_cloud
+        && let Some(view) = views.get(candidate.view)
+    {
         // The contacts' pixels; a grasp at no depth has none on the surface.
         let Some(jaws) = candidate.image.jaws_px(view.depth.intrinsics().fx) else {
             return Some(Rejection::ContactOffSurface);
@@ -345,6 +347,7 @@ mod tests {
             view_quality: None,
             virtual_quality: None,
             by_scorer: false,
+            from_cloud: false,
         };
         let across = grasp(down);
         let panda = Gripper::default();

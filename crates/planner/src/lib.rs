@@ -1,6 +1,7 @@
 #![doc = include_str!("../README.md")]
 
 pub mod cem;
+pub mod cloud_sampler;
 pub mod contract;
 pub mod crop;
 pub mod depth_image;
@@ -21,6 +22,7 @@ mod test_scenes;
 pub mod virtual_view;
 
 pub use cem::CemParams;
+pub use cloud_sampler::{CloudSamplerParams, sample_cloud_grasps};
 pub use contract::InputContract;
 pub use crop::{CropParams, crop_depth};
 pub use depth_image::{DepthImage, Mask, View, theta_rad};

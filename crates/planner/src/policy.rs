@@ -47,13 +47,23 @@ pub struct ScoredGrasp {
     /// policy's.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub by_scorer: bool,
+    /// Sampled on the fused model's points ([`crate::cloud_sampler`]), not in a view's image:
+    /// `view` is the view that looks most nearly along its approach and `image` the grasp as
+    /// that view sees it.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub from_cloud: bool,
 }
 
 impl ScoredGrasp {
     /// Which quota of the per-view hand check and re-scoring the candidate counts against:
-    /// its view's, the scorer's own candidates apart from the policy's.
+    /// its view's, the scorer's own candidates apart from the policy's, and those sampled on
+    /// the fused model all in one.
     pub fn quota(&self) -> (usize, bool) {
-        (self.view, self.by_scorer)
+        if self.from_cloud {
+            (usize::MAX, false)
+        } else {
+            (self.view, self.by_scorer)
+        }
     }
 }
 
@@ -263,6 +273,9 @@ impl GqcnnPolicy {
         if let Some((scorer, _)) = scorer {
             plan.merge(scorer.propose(views, seed)?);
         }
+        if let Some((scorer, fusion)) = scorer {
+            plan.merge(scorer.propose_on_cloud(fusion, views, seed)?);
+        }
         if hand_check {
             match scorer {
                 Some((s, _)) => plan.reject_colliding_each_view(
@@ -313,6 +326,7 @@ impl GqcnnPolicy {
                 view_quality: None,
                 virtual_quality: None,
                 by_scorer: false,
+                from_cloud: false,
             })
             .collect())
     }

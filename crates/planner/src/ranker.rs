@@ -17,10 +17,10 @@ use crate::policy::ScoredGrasp;
 use crate::virtual_view::tilt_rad;
 
 /// The ranker file's format tag.
-pub const RANKER_FORMAT: &str = "mvgrasp-ranker/1";
+pub const RANKER_FORMAT: &str = "mvgrasp-ranker/2";
 
 /// The model's inputs, in the order of its weights (see [`Ranker::features`]).
-pub const FEATURES: [&str; 8] = [
+pub const FEATURES: [&str; 9] = [
     "bias",
     "logit_quality",
     "logit_view_quality",
@@ -29,6 +29,7 @@ pub const FEATURES: [&str; 8] = [
     "by_scorer",
     "width",
     "height",
+    "from_cloud",
 ];
 
 /// Scores are clamped to this distance from 0 and 1 before their logit.
@@ -112,6 +113,7 @@ impl Ranker {
             f32::from(u8::from(candidate.by_scorer)),
             candidate.grasp.width_m / 0.05,
             height / 0.05,
+            f32::from(u8::from(candidate.from_cloud)),
         ]
     }
 
@@ -165,7 +167,7 @@ mod tests {
                 "format",
             ),
             (
-                r#"{"format": "mvgrasp-ranker/1", "features": ["bias"], "weights": [0]}"#,
+                r#"{"format": "mvgrasp-ranker/2", "features": ["bias"], "weights": [0]}"#,
                 "features",
             ),
         ];
@@ -176,8 +178,8 @@ mod tests {
         let short =
             format!(r#"{{"format": "{RANKER_FORMAT}", "features": {features}, "weights": [1]}}"#);
         let err = Ranker::from_json(&short, path).unwrap_err().to_string();
-        assert!(err.contains("1 weights for 8 features"), "{err}");
-        let weights = format!("[{}]", ["1"; 8].join(","));
+        assert!(err.contains("1 weights for 9 features"), "{err}");
+        let weights = format!("[{}]", ["1"; 9].join(","));
         let fine = format!(
             r#"{{"format": "{RANKER_FORMAT}", "features": {features}, "weights": {weights}}}"#
         );

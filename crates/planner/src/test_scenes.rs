@@ -110,5 +110,6 @@ pub(crate) fn centred_candidate(
         view_quality: None,
         virtual_quality: None,
         by_scorer: false,
+        from_cloud: false,
     }
 }

@@ -17,6 +17,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::cloud_sampler::{CloudSamplerParams, sample_cloud_grasps};
 use crate::contract::InputContract;
 use crate::crop::CropParams;
 use crate::depth_image::View;
@@ -29,6 +30,8 @@ use crate::seed::splitmix;
 
 /// Salts the scorer's own proposals' seed apart from the planner's.
 const PROPOSE_SALT: u64 = 0x70d0_5eed;
+/// ... and the fused model's candidates' seed.
+const CLOUD_SALT: u64 = 0xc10d_5eed;
 
 /// How candidates are re-scored on virtual views.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -59,6 +62,28 @@ pub struct VirtualViewParams {
     pub propose_top_down: bool,
     /// See `propose_top_down`, radians.
     pub top_down_tolerance_rad: f32,
+    /// Candidates sampled on the fused model's points in any reachable direction
+    /// ([`crate::cloud_sampler`]; `num_grasps` 0: none), checked and re-scored like the others
+    /// in a quota of their own.
+    pub cloud: CloudSamplerParams,
+}
+
+/// A hash of `grasp`'s pose and width (its floats' bits).
+fn grasp_key(grasp: &Grasp) -> u64 {
+    let pose = &grasp.world_from_gripper;
+    let q = pose.rotation;
+    [
+        pose.translation.x,
+        pose.translation.y,
+        pose.translation.z,
+        q.x,
+        q.y,
+        q.z,
+        q.w,
+        grasp.width_m,
+    ]
+    .iter()
+    .fold(0u64, |h, v| splitmix(h ^ u64::from(v.to_bits())))
 }
 
 /// The angle between `grasp`'s approach and straight down, radians.
@@ -82,6 +107,7 @@ impl Default for VirtualViewParams {
             perturb_rotation_rad: 5f32.to_radians(),
             propose_top_down: true,
             top_down_tolerance_rad: 10f32.to_radians(),
+            cloud: CloudSamplerParams::default(),
         }
     }
 }
@@ -317,29 +343,75 @@ impl VirtualScorer {
             .map(|c| ScoredGrasp {
                 view: indices[c.view],
                 by_scorer: true,
+                from_cloud: false,
                 ..c
             })
             .collect())
     }
 
+    /// Candidates sampled on `fusion`'s points ([`VirtualViewParams::cloud`]), scored on their
+    /// virtual views, each credited to the view of `views` that looks most nearly along its
+    /// approach; none when not asked for.
+    ///
+    /// # Errors
+    /// A network error.
+    pub fn propose_on_cloud(
+        &self,
+        fusion: &Fusion,
+        views: &[View],
+        seed: u64,
+    ) -> Result<Vec<ScoredGrasp>> {
+        if self.params.cloud.num_grasps == 0 || views.is_empty() {
+            return Ok(Vec::new());
+        }
+        let seed = splitmix(seed ^ CLOUD_SALT);
+        let grasps = sample_cloud_grasps(fusion, self.policy.max_width_m, &self.params.cloud, seed);
+        let quality = self.score(fusion, &grasps, seed)?;
+        Ok(grasps
+            .into_iter()
+            .zip(quality)
+            .filter_map(|(grasp, q)| {
+                let approach = grasp.approach();
+                let (index, view) = views.iter().enumerate().max_by(|a, b| {
+                    let along = |v: &View| v.camera.optical_axis().dot(approach);
+                    along(a.1).total_cmp(&along(b.1))
+                })?;
+                let image = grasp.to_image(&view.camera, std::f32::consts::FRAC_PI_2)?;
+                Some(ScoredGrasp {
+                    view: index,
+                    image,
+                    grasp,
+                    theta_rad: view.theta_rad(),
+                    quality: q,
+                    view_quality: Some(q),
+                    virtual_quality: None,
+                    by_scorer: false,
+                    from_cloud: true,
+                })
+            })
+            .collect())
+    }
+
     /// The network's probability that each grasp is robust, seen on its virtual view of
-    /// `fusion` (the mean over the perturbed copies, where asked for; deterministic from `seed`).
+    /// `fusion` (the mean over the perturbed copies, where asked for; deterministic from `seed`
+    /// and the grasp itself, so that a grasp's score does not depend on the others scored with
+    /// it).
     ///
     /// # Errors
     /// A network error.
     pub fn score(&self, fusion: &Fusion, grasps: &[Grasp], seed: u64) -> Result<Vec<f32>> {
         let p = &self.params;
         let copies = p.perturbations + 1;
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let mut jitter = |r: f32| {
-            if r > 0.0 {
-                rng.random_range(-r..=r)
-            } else {
-                0.0
-            }
-        };
         let mut posed = Vec::with_capacity(grasps.len() * copies);
         for grasp in grasps {
+            let mut rng = ChaCha8Rng::seed_from_u64(splitmix(seed ^ grasp_key(grasp)));
+            let mut jitter = |r: f32| {
+                if r > 0.0 {
+                    rng.random_range(-r..=r)
+                } else {
+                    0.0
+                }
+            };
             posed.push(*grasp);
             for _ in 0..p.perturbations {
                 let (t, r) = (p.perturb_translation_m, p.perturb_rotation_rad);

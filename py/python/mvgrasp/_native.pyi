@@ -355,8 +355,9 @@ def plan_mesh(
 ) -> dict[str, Any]:
     """Plans a grasp on a mesh as ``plan --mesh --depth-from DEPTH_FROM`` does (rest, render,
     predict depth from the colour views with ``"baseline"``, ``"mvs"`` or ``"lsm"``, plan, check); returns
-    ``{"report", "grasps_json", "timings"}``: ``plan --json``'s plan report, the text of
-    ``grasps.json`` and each stage's seconds. ``ValueError`` for a bad option value,
+    ``{"report", "grasps_json", "timings", "hold_probability"}``: ``plan --json``'s plan
+    report, the text of ``grasps.json``, each stage's seconds and the best grasp's chance to
+    hold (``None`` for planners without one). ``ValueError`` for a bad option value,
     ``CameraError`` for an unknown camera preset, ``RenderError``, ``WeightsError``."""
 
 def project_points(

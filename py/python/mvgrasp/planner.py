@@ -89,6 +89,10 @@ class PlanResult:
     grasps_json: str = field(repr=False)
     table: Optional[dict[str, Any]] = None
     report: Optional[dict[str, Any]] = field(default=None, repr=False)
+    #: On a mesh with the top-down GQ-CNN and the default views (rendered depth or the plane
+    #: sweep's): the best grasp's chance to hold, its quality mapped to the trial's outcomes
+    #: (``models/probability_topdown.json``, as ``plan`` prints it); else ``None``.
+    hold_probability: Optional[float] = None
 
     @property
     def best(self) -> Optional[PlannedGrasp]:
@@ -118,6 +122,7 @@ class PlanResult:
         text: str,
         timings: dict[str, float],
         report: Optional[dict[str, Any]] = None,
+        hold_probability: Optional[float] = None,
     ) -> PlanResult:
         content = json.loads(text)
         grasps = [PlannedGrasp.from_dict(g) for g in content["grasps"]]
@@ -150,6 +155,7 @@ class PlanResult:
             grasps_json=text,
             table=content.get("table"),
             report=report,
+            hold_probability=hold_probability,
         )
 
 
@@ -322,4 +328,6 @@ class Planner:
             **self._options(),
         )
         timings = dict(result["timings"], total_s=time.perf_counter() - started)
-        return PlanResult._of(result["grasps_json"], timings, result["report"])
+        return PlanResult._of(
+            result["grasps_json"], timings, result["report"], result["hold_probability"]
+        )
