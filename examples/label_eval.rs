@@ -10,8 +10,15 @@
 //!
 //! ```text
 //! cargo run --release --example label_eval -- [--per-category 5] [--n 20] [--k 10]
-//!     [--outcome-k 50] [--data ../shared/data/meshes] [--json OUT.json]
+//!     [--outcome-k 50] [--data ../shared/data/meshes] [--json OUT.json] [--replay DIR]
 //! ```
+//!
+//! `--replay DIR` also writes what another physics engine needs to replay every grasp's
+//! unperturbed trial (`scripts/judge/pybullet_judge.py` reads it): `DIR/replay.json` (the
+//! gripper, the physics parameters, and per grasp the object's files, its resting pose, the
+//! grasp, the unperturbed trial's outcome and the K-trial rates) and, once per object,
+//! `DIR/meshes/NAME.obj` (the mesh, object frame) and `DIR/meshes/NAME.parts.obj` (the convex
+//! parts the trial collides with, one `o` group a part, object frame).
 //!
 //! Reports, per category and overall, each label's confusion table against the outcome, its
 //! false-positive rate (outcome failed, label positive, over outcome failed) and the share of
@@ -27,7 +34,7 @@ use clap::Parser;
 use mvgrasp::geometry::objects::{Category, generate};
 use mvgrasp::geometry::{TriangleMesh, load_mesh};
 use mvgrasp::grasp::physics::{
-    PhysicsNoise, PhysicsObject, PhysicsParams, StageCounts, success_probability,
+    PhysicsNoise, PhysicsObject, PhysicsOutcome, PhysicsParams, StageCounts, success_probability,
 };
 use mvgrasp::grasp::quality::{RobustQualityParams, grasp_seed};
 use mvgrasp::grasp::{AnalysisConfig, Gripper, SamplingParams};
@@ -50,8 +57,123 @@ struct Args {
     /// Perturbed trials of the outcome.
     #[arg(long, default_value_t = 50)]
     outcome_k: usize,
+    /// Write what another engine needs to replay each grasp's unperturbed trial here
+    /// (replay.json and meshes/).
+    #[arg(long)]
+    replay: Option<std::path::PathBuf>,
     #[command(flatten)]
     eval: EvalArgs,
+}
+
+/// What a replay of the unperturbed trials in another engine needs (`--replay`).
+#[derive(Serialize)]
+struct Replay<'a> {
+    /// The gripper every grasp is tried with.
+    gripper: &'a Gripper,
+    /// The trial's parameters (density, table friction, lift, shake, tolerances...).
+    physics: &'a PhysicsParams,
+    /// The closing force each finger squeezes with, newtons.
+    closing_force_n: f32,
+    /// The label's and the outcome's perturbations.
+    noise: &'a PhysicsNoise,
+    objects: Vec<ReplayObject>,
+    grasps: Vec<ReplayGrasp>,
+}
+
+/// One object of a replay.
+#[derive(Serialize)]
+struct ReplayObject {
+    name: String,
+    group: String,
+    /// The mesh, object frame, relative to the replay folder.
+    mesh: String,
+    /// The convex parts the trial collides with, one `o` group a part, object frame.
+    parts: String,
+    num_parts: usize,
+    /// Its resting pose on the table (the table frame is the world: z up, the top at z = 0).
+    #[serde(with = "mvgrasp::geometry::pose_as_matrix")]
+    table_from_object: mvgrasp::geometry::Pose3,
+    /// The mesh's mass at the trial's density, kilograms.
+    mass_kg: f32,
+    /// Its centre of mass, object frame, metres.
+    center_of_mass: [f32; 3],
+    /// Its inertia about the centre of mass, object-frame axes, kg m^2 (rows).
+    inertia_kg_m2: [[f32; 3]; 3],
+}
+
+/// One grasp of a replay.
+#[derive(Serialize)]
+struct ReplayGrasp {
+    /// Index into `objects`.
+    object: usize,
+    /// The grasp's index on its object.
+    index: usize,
+    /// Gripper frame in the table frame: origin midway between the finger tips, +z the
+    /// approach, +x the closing axis.
+    #[serde(with = "mvgrasp::geometry::pose_as_matrix")]
+    world_from_gripper: mvgrasp::geometry::Pose3,
+    width_m: f32,
+    robust_epsilon: f64,
+    robust: bool,
+    /// The unperturbed rapier trial.
+    outcome: PhysicsOutcome,
+    /// Of the label's K perturbed trials that got past settling, the share that held.
+    physics_rate: Option<f64>,
+    /// The same of the outcome's trials.
+    outcome_rate: Option<f64>,
+}
+
+/// Writes `mesh` and `body`'s convex parts as OBJ files in `dir`; their names in `dir`.
+fn write_replay_meshes(
+    dir: &std::path::Path,
+    name: &str,
+    mesh: &TriangleMesh,
+    body: &PhysicsObject,
+) -> Result<(String, String), String> {
+    let stem: String = name
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    let (mesh_name, parts_name) = (format!("{stem}.obj"), format!("{stem}.parts.obj"));
+    mvgrasp::geometry::write_obj(mesh, dir.join(&mesh_name)).map_err(|e| e.to_string())?;
+    let shape = body.shape();
+    let parts: Vec<(mvgrasp::geometry::Pose3, &dyn parry3d::shape::Shape)> =
+        match shape.as_compound() {
+            Some(compound) => compound.shapes().iter().map(|(p, s)| (*p, &**s)).collect(),
+            None => vec![(mvgrasp::geometry::Pose3::IDENTITY, &**shape)],
+        };
+    let mut text =
+        String::from("# convex parts of the physics trial's shape; metres, object frame\n");
+    let mut first = 1;
+    for (i, (pose, part)) in parts.iter().enumerate() {
+        let hull = part
+            .as_convex_polyhedron()
+            .ok_or_else(|| format!("{name}: part {i} is not a convex polyhedron"))?;
+        let (points, triangles) = hull.to_trimesh();
+        text.push_str(&format!("o part_{i}\n"));
+        for p in &points {
+            let p = pose.transform_point(*p);
+            text.push_str(&format!("v {} {} {}\n", p.x, p.y, p.z));
+        }
+        for t in &triangles {
+            text.push_str(&format!(
+                "f {} {} {}\n",
+                t[0] as usize + first,
+                t[1] as usize + first,
+                t[2] as usize + first
+            ));
+        }
+        first += points.len();
+    }
+    let path = dir.join(&parts_name);
+    std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok((mesh_name, parts_name))
 }
 
 /// One grasp's labels and outcome.
@@ -135,6 +257,18 @@ fn run(args: &Args) -> Result<(), String> {
     let gripper = Gripper::default();
     let started = Instant::now();
     let mut all = Vec::new();
+    let mut replay = Replay {
+        gripper: &gripper,
+        physics: &params,
+        closing_force_n: params.closing_force_n.unwrap_or(gripper.force_limit_n),
+        noise: &noise,
+        objects: Vec::new(),
+        grasps: Vec::new(),
+    };
+    if let Some(dir) = &args.replay {
+        let meshes = dir.join("meshes");
+        std::fs::create_dir_all(&meshes).map_err(|e| format!("{}: {e}", meshes.display()))?;
+    }
     for (group, name, mesh) in &objects {
         let Some(Rested {
             table_from_object,
@@ -147,6 +281,25 @@ fn run(args: &Args) -> Result<(), String> {
         };
         let body =
             PhysicsObject::from_grasp_object(&object, &config.shape).map_err(|e| e.to_string())?;
+        if let Some(dir) = &args.replay {
+            let (mesh_file, parts_file) =
+                write_replay_meshes(&dir.join("meshes"), name, object.mesh(), &body)?;
+            let mass = object
+                .mesh()
+                .mass_facts(params.object_density_kg_m3)
+                .map_err(|e| e.to_string())?;
+            replay.objects.push(ReplayObject {
+                name: name.clone(),
+                group: group.clone(),
+                mesh: format!("meshes/{mesh_file}"),
+                parts: format!("meshes/{parts_file}"),
+                num_parts: body.num_parts(),
+                table_from_object,
+                mass_kg: mass.mass_kg,
+                center_of_mass: mass.center_of_mass.to_array(),
+                inertia_kg_m2: mass.inertia_kg_m2,
+            });
+        }
         for (i, g) in analysis.grasps.iter().enumerate() {
             let label = g
                 .physics_success
@@ -164,6 +317,19 @@ fn run(args: &Args) -> Result<(), String> {
                 grasp_seed(grasp_seed(args.eval.seed, 3), i),
             )
             .map_err(|e| e.to_string())?;
+            if args.replay.is_some() {
+                replay.grasps.push(ReplayGrasp {
+                    object: replay.objects.len() - 1,
+                    index: i,
+                    world_from_gripper: g.grasp.world_from_gripper,
+                    width_m: g.grasp.width_m,
+                    robust_epsilon: g.quality.robust_epsilon,
+                    robust: g.robust_label,
+                    outcome: g.physics.ok_or("the analysis ran no unperturbed trial")?,
+                    physics_rate: label.settled_rate(),
+                    outcome_rate: outcome.settled_rate(),
+                });
+            }
             all.push(Labelled {
                 object: name.clone(),
                 group: group.clone(),
@@ -224,6 +390,11 @@ fn run(args: &Args) -> Result<(), String> {
     if let Some(path) = &args.eval.json {
         let text = serde_json::to_string_pretty(&all).map_err(|e| e.to_string())?;
         std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    if let Some(dir) = &args.replay {
+        let path = dir.join("replay.json");
+        let text = serde_json::to_string_pretty(&replay).map_err(|e| e.to_string())?;
+        std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
     }
     Ok(())
 }
