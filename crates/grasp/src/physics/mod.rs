@@ -67,10 +67,12 @@
 //!
 //! The object is held when, at the end of a phase: both fingers are within
 //! [`PhysicsParams::contact_tolerance_m`] of it (exact distances, not contact caches), it is
-//! farther than that from the table, its centre of mass has risen at least
-//! [`PhysicsParams::min_lift_fraction`] of the lift height above where it rested, and, if
-//! [`PhysicsParams::max_slip_m`] is set, its centre of mass has moved at most that much in the
-//! gripper frame since the fingers closed. A trial succeeds when the object is held after the shake.
+//! farther than that from the table, the fingers have not shut (their opening is wider than
+//! the gripper's narrowest by more than a millimetre, as after the close), its centre of mass
+//! has risen at least [`PhysicsParams::min_lift_fraction`] of the lift height above where it
+//! rested, and, if [`PhysicsParams::max_slip_m`] is set, its centre of mass has moved at most
+//! that much in the gripper frame since the fingers closed. A trial succeeds when the object is
+//! held after the shake.
 //!
 //! rapier runs single-threaded here (the crate does not enable its `parallel` feature), so a
 //! trial is deterministic: the same inputs give the same outcome and the same final pose bits.

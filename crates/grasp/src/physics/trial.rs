@@ -128,6 +128,8 @@ struct Trial<'a> {
 /// What the trial knows once the fingers have closed.
 struct Grip {
     hand: Hand,
+    /// The gripper's narrowest opening: fingers within [`SHUT_TOLERANCE_M`] of it hold nothing.
+    min_opening_m: f32,
     rest_com_z: f32,
     /// The object in the gripper frame when the fingers had closed.
     gripper_from_object: Pose3,
@@ -230,11 +232,12 @@ impl Trial<'_> {
             .finger_colliders
             .iter()
             .all(|&f| self.scene.finger_distance(f) <= p.contact_tolerance_m);
-        if !touching || opening_m <= gripper.min_opening_m + SHUT_TOLERANCE_M {
+        if !touching || shut(opening_m, gripper.min_opening_m) {
             return Err(opening_m);
         }
         let world_from_gripper = self.palm_pose(&hand);
         Ok(Grip {
+            min_opening_m: gripper.min_opening_m,
             rest_com_z: rest_com.z,
             gripper_from_object: world_from_gripper.inverse() * self.scene.world_from_object(),
             com_in_gripper: world_from_gripper.inverse_transform_point(self.scene.object_com()),
@@ -337,8 +340,10 @@ impl Trial<'_> {
         (x[0] - x[1] - hand.shape.thickness).max(0.0)
     }
 
-    /// The held test: both fingers touch the object, the table does not, the centre of mass has
-    /// risen enough and has not slid too far in the hand.
+    /// The held test: both fingers touch the object, the table does not, the fingers have not
+    /// shut (an object between them keeps them apart; shut fingers touching it have passed into
+    /// its collision shape or carry it hanging on one finger), the centre of mass has risen
+    /// enough and has not slid too far in the hand.
     fn hold(&self, grip: &Grip) -> Hold {
         let p = self.params;
         let scene = &self.scene;
@@ -358,15 +363,17 @@ impl Trial<'_> {
             .iter()
             .all(|&f| scene.finger_distance(f) <= p.contact_tolerance_m);
         let off_table = scene.distance_to_object(scene.table) > p.contact_tolerance_m;
+        let opening_m = self.opening(&grip.hand);
         Hold {
             held: fingers_touch
                 && off_table
+                && !shut(opening_m, grip.min_opening_m)
                 && lift_m >= p.min_lift_fraction * p.lift_height_m
                 && p.max_slip_m.is_none_or(|max| slip_m <= max),
             lift_m,
             slip_m,
             slip_rad,
-            opening_m: self.opening(&grip.hand),
+            opening_m,
         }
     }
 
@@ -405,9 +412,24 @@ fn min_jerk(s: f32) -> f32 {
     s * s * s * (10.0 + s * (-15.0 + 6.0 * s))
 }
 
+/// Whether fingers at `opening_m` have shut: within [`SHUT_TOLERANCE_M`] of the gripper's
+/// narrowest opening, where nothing is between them.
+fn shut(opening_m: f32, min_opening_m: f32) -> bool {
+    opening_m <= min_opening_m + SHUT_TOLERANCE_M
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn fingers_within_a_millimetre_of_their_narrowest_have_shut() {
+        assert!(shut(0.0, 0.0));
+        assert!(shut(0.4e-3, 0.0));
+        assert!(!shut(2.0e-3, 0.0));
+        assert!(shut(10.5e-3, 10.0e-3));
+        assert!(!shut(12.0e-3, 10.0e-3));
+    }
 
     #[test]
     fn min_jerk_runs_from_zero_to_one_smoothly() {
