@@ -31,16 +31,16 @@ fn plan_with_no_arguments_plans_on_depth_from_rgb_beside_the_rendered_depth() {
     assert!(text.contains("training views: 20 views"), "{text}");
     assert!(text.contains("test views:     10 views"), "{text}");
     assert!(text.contains("stable"), "{text}");
-    // RGB -> depth by the plane-sweep baseline from 5 views 0.7 m away (the top-down GQ-CNN's
-    // distance) -> the top-down GQ-CNN in the top-down one.
+    // RGB -> depth by the plane-sweep baseline from 5 views 0.65 m away -> the multi-view
+    // planner over all of them, its grasp ranked by its chance to hold.
     assert!(
-        text.contains("plan: gqcnn_small_topdown (GQ-CNN in the first, top-down view")
-            && text.contains("5 view(s) 0.70 m away"),
+        text.contains("plan: gqcnn_small_multiview (the multi-view planner: the views fused")
+            && text.contains("5 view(s) 0.65 m away"),
         "{text}"
     );
     assert!(
-        text.contains("      1   22.9 deg           0             -"),
-        "only the top-down view plans: {text}"
+        !text.contains("      1   22.9 deg           0             -"),
+        "every view plans: {text}"
     );
     assert!(
         text.contains("predicted by the plane-sweep baseline"),
@@ -80,7 +80,7 @@ fn plan_on_rendered_depth_describes_the_mug_and_checks_the_grasp() {
     );
     assert!(!text.contains("predicted by"), "{text}");
     // The top-down GQ-CNN alone, as Dex-Net 2.0.
-    let text = plan_text(&["--depth-from", "rendered", "--no-physics"]);
+    let text = plan_text(&["--depth-from", "rendered", "--no-physics", "--no-fuse"]);
     assert!(
         text.contains("plan: gqcnn_small_topdown (GQ-CNN)")
             && text.contains("1 view(s) 0.70 m away"),
@@ -248,7 +248,8 @@ fn plan_text(args: &[&str]) -> String {
 }
 
 /// A 17 x 13 cm box lying flat, 3.8 cm tall: too wide for the Panda from above, too low to take
-/// from the side without a finger in the table. The planner returns no grasp and says why.
+/// from the side without a finger in the table. The multi-view GQ-CNN planning in each view on
+/// its own returns no grasp and says why.
 #[test]
 fn plan_says_why_it_returns_no_grasp() {
     let out = plan(&[
@@ -258,6 +259,7 @@ fn plan_says_why_it_returns_no_grasp() {
         "2",
         "--model",
         "gqcnn_small_multiview",
+        "--no-fuse",
         "--views",
         "4",
         "--depth-from",
@@ -277,28 +279,36 @@ fn plan_says_why_it_returns_no_grasp() {
     );
 }
 
-/// The default run's grasp carries its chance to hold; `--min-probability` above it answers
-/// no grasp (exit code 3) with that chance, at 0 the grasp is returned.
+/// The default run's grasp carries its chance to hold (the multi-view planner's ranker; with
+/// `--no-fuse` the top-down GQ-CNN's mapped quality); `--min-probability` above it answers no
+/// grasp (exit code 3) with that chance, at 0 the grasp is returned.
 #[test]
 fn plan_answers_no_grasp_below_the_chance_asked_for() {
-    let text = plan_text(&["--no-physics"]);
-    let line = text
-        .lines()
-        .find(|l| l.starts_with("chance to hold: "))
-        .unwrap_or_else(|| panic!("{text}"));
-    let chance: f32 = line["chance to hold: ".len()..][..4].parse().unwrap();
-    assert!((0.0..=1.0).contains(&chance), "{line}");
-    assert!(plan_text(&["--no-physics", "--min-probability", "0"]).contains(line));
-    let above = format!("{:.2}", (chance + 0.01).min(1.0));
-    let out = plan(&["--no-physics", "--min-probability", &above]);
-    assert_eq!(out.status.code(), Some(3));
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        text.contains(&format!(
-            "no grasp reaches a chance of {above} to hold: the best's is {chance:.2}"
-        )),
-        "{text}"
-    );
+    for (planner, model) in [
+        (&[][..], "models/ranker_fused.json"),
+        (&["--no-fuse"][..], "models/probability_topdown.json"),
+    ] {
+        let args = |more: &[&'static str]| [&["--no-physics"][..], planner, more].concat();
+        let text = plan_text(&args(&[]));
+        let line = text
+            .lines()
+            .find(|l| l.starts_with("chance to hold: "))
+            .unwrap_or_else(|| panic!("{text}"));
+        assert!(line.contains(model), "{line}");
+        let chance: f32 = line["chance to hold: ".len()..][..4].parse().unwrap();
+        assert!((0.0..=1.0).contains(&chance), "{line}");
+        assert!(plan_text(&args(&["--min-probability", "0"])).contains(line));
+        let above = format!("{:.2}", (chance + 0.01).min(1.0));
+        let out = plan(&[&args(&[])[..], &["--min-probability", above.as_str()]].concat());
+        assert_eq!(out.status.code(), Some(3), "{planner:?}");
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            text.contains(&format!(
+                "no grasp reaches a chance of {above} to hold: the best's is {chance:.2}"
+            )),
+            "{text}"
+        );
+    }
 }
 
 #[test]
@@ -314,7 +324,7 @@ fn plan_reports_bad_input_in_one_line_and_exits_2() {
         &["--views", "11"][..],
         &["--distance-m", "0"][..],
         &["--min-probability", "1.5"][..],
-        &["--fuse", "--min-probability", "0.5"][..],
+        &["--no-fuse", "--cem", "--min-probability", "0.5"][..],
     ] {
         let out = plan(args);
         assert_eq!(out.status.code(), Some(2), "{args:?}");

@@ -73,7 +73,7 @@ fn a_run_interrupted_and_resumed_writes_the_same_bytes_as_one_that_was_not() {
     assert!(results.objects.iter().all(|p| p.holdable.is_some()));
     let report = std::fs::read_to_string(whole.join("report.md")).unwrap();
     assert!(
-        report.contains("| depth | `plan --depth-from rendered` | the same planner on a perfect depth camera | folder:"),
+        report.contains("| depth | `plan --no-fuse --depth-from rendered` | the top-down GQ-CNN on a perfect depth camera | folder:"),
         "{report}"
     );
 

@@ -387,7 +387,8 @@ fn plan_on_depth_writes_grasps_json_and_an_overlay() {
 }
 
 /// `plan --views-dir` on a folder `render` wrote (10 test views of a box, depth in 0.1 mm,
-/// masks 0 / 1 object / 2 table): the multi-view GQ-CNN's grasp lies on the box; and folders
+/// masks 0 / 1 object / 2 table): the multi-view GQ-CNN's grasp (each view on its own, and
+/// the multi-view planner's) lies on the box; and folders
 /// whose cameras and images disagree are refused.
 #[test]
 fn plan_over_a_rendered_views_folder() {
@@ -396,7 +397,7 @@ fn plan_over_a_rendered_views_folder() {
     let views_dir = dir.path().join("box_000/test");
     let out = dir.path().join("out");
     let planned = Command::new(env!("CARGO_BIN_EXE_plan"))
-        .args(["--views-dir", views_dir.to_str().unwrap()])
+        .args(["--views-dir", views_dir.to_str().unwrap(), "--no-fuse"])
         .args([
             "--model",
             "gqcnn_small_multiview",

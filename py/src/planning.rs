@@ -4,8 +4,8 @@
 
 use mvgrasp::grasps_file::GraspsFile;
 use mvgrasp::planner::{
-    DepthFrom, DepthImage, DepthPredictor, HoldProbability, Mask, PlanOptions, View, plan_grasp,
-    plan_on_rgb_views, plan_on_view, plan_on_views,
+    DepthFrom, DepthImage, DepthPredictor, Mask, PlanOptions, View, plan_grasp, plan_on_rgb_views,
+    plan_on_view, plan_on_views,
 };
 use mvgrasp::stereo::RgbView;
 use mvgrasp_geometry::{Camera, Pose3};
@@ -227,7 +227,7 @@ pub(crate) fn plan_mesh<'py>(
         ..options(fuse, cem, hand_check, seed)
     };
     let backend = backend_of(backend)?;
-    let source = options.hold_source(model.unwrap_or(options.default_model()), false);
+    let source = options.chance_source(model.unwrap_or(options.default_model()), false);
     let net = network(model, &options)?;
     let (policy, params) = options.on_mesh(net).map_err(pipeline_error)?;
     let report = py
@@ -242,11 +242,7 @@ pub(crate) fn plan_mesh<'py>(
         "render_s": t.render_s, "depth_s": t.depth_s, "fuse_s": t.fuse_s, "plan_s": t.plan_s, "check_s": t.check_s,
     });
     let hold_probability = match (report.best.as_ref(), source) {
-        (Some(best), Some(source)) => Some(
-            HoldProbability::shipped()
-                .map_err(|e| pipeline_error(e.into()))?
-                .of(best.quality, source),
-        ),
+        (Some(best), Some(source)) => source.of(best).map_err(pipeline_error)?,
         _ => None,
     };
     let result = to_python(

@@ -61,10 +61,10 @@ def test_planning_on_depth_writes_the_cli_grasps_json_byte_for_byte(tmp_path: Pa
 
 
 def test_planning_on_a_mesh_matches_the_cli_and_checks_in_physics(tmp_path: Path) -> None:
-    plan_cli("--category", "box", "--no-physics", "--depth-from", "rendered",
+    plan_cli("--category", "box", "--no-physics", "--depth-from", "rendered", "--no-fuse",
              "--out", str(tmp_path / "cli"))  # fmt: skip
     vertices, triangles = mvgrasp.builtin_object("box", 0)
-    result = mvgrasp.Planner().plan_mesh(vertices, triangles)
+    result = mvgrasp.Planner(fuse=False).plan_mesh(vertices, triangles)
     assert result.grasps_json.encode() == (tmp_path / "cli" / "grasps.json").read_bytes()
     assert result.frame == "rendered"
     assert result.physics is not None and result.physics["success"]
@@ -80,13 +80,15 @@ def test_planning_on_a_mesh_matches_the_cli_and_checks_in_physics(tmp_path: Path
     assert fused.best.virtual_quality is not None and 0.0 <= fused.best.quality <= 1.0
     with pytest.raises(ValueError, match="views = 11"):
         mvgrasp.Planner().plan_mesh(vertices, triangles, views=11)
-    # The CLI's default: depth predicted by the baseline from 5 colour views, the top-down
-    # GQ-CNN in the top-down one; the same bytes.
+    # The CLI's default: depth predicted by the baseline from 5 colour views, the multi-view
+    # planner over them; the same bytes.
     plan_cli("--category", "box", "--no-physics", "--out", str(tmp_path / "rgb"))
     assert (tmp_path / "rgb" / "views.png").is_file()
     default = mvgrasp.Planner().plan_mesh(vertices, triangles, physics=False,
                                           depth_from="baseline")  # fmt: skip
     assert default.grasps_json.encode() == (tmp_path / "rgb" / "grasps.json").read_bytes()
+    assert len(default.views) == 5 and default.best is not None
+    assert default.best.virtual_quality is not None
     # The chance to hold is the CLI's, for the planners that have one.
     shown = json.loads(subprocess.run(
         ["cargo", "run", "--quiet", "--profile", "dist", "--bin", "plan", "--",
@@ -95,8 +97,12 @@ def test_planning_on_a_mesh_matches_the_cli_and_checks_in_physics(tmp_path: Path
     ).stdout)  # fmt: skip
     assert default.hold_probability is not None and 0.0 < default.hold_probability < 1.0
     assert default.hold_probability == pytest.approx(shown["hold_probability"], abs=1e-6)
-    assert result.hold_probability is not None and fused.hold_probability is None
-    learnt = mvgrasp.Planner().plan_mesh(vertices, triangles, physics=False, depth_from="lsm")
+    # The multi-view planner's chance is its ranked quality; the top-down GQ-CNN's is mapped.
+    assert fused.hold_probability == pytest.approx(fused.best.quality, abs=1e-6)
+    assert result.hold_probability is not None and result.best is not None
+    assert result.hold_probability != pytest.approx(result.best.quality, abs=1e-6)
+    learnt = mvgrasp.Planner(fuse=False).plan_mesh(vertices, triangles, physics=False,
+                                                   depth_from="lsm")  # fmt: skip
     assert learnt.timings["depth_s"] > 0 and len(learnt.views) == 5
     assert learnt.grasps and all(g.view == 0 for g in learnt.grasps)
     # --fuse: the multi-view planner on the same predicted views.

@@ -49,9 +49,10 @@ struct Args {
     /// --full: all).
     #[arg(long)]
     max_meshes: Option<usize>,
-    /// A policy (repeat): rgb (the default run), depth (the same on rendered depth),
-    /// rgb-fused, depth-fused, lsm, lsm-fused, mvs, mvs-fused, refined, refined-fused.
-    /// Default: rgb and depth.
+    /// A policy (repeat): rgb-fused (the default run: the multi-view planner on the plane
+    /// sweep's depth from RGB views), depth-fused (the same on rendered depth), rgb and depth
+    /// (the top-down GQ-CNN alone: `plan --no-fuse`), lsm, lsm-fused, mvs, mvs-fused,
+    /// refined, refined-fused. Default: rgb-fused and depth-fused.
     #[arg(long = "policy")]
     policies: Vec<String>,
     /// The plans' seeds (default 0; --full: 0,1,2).

@@ -27,52 +27,52 @@ pub struct EvalPolicy {
 pub const POLICIES: [(&str, &str, &str); 10] = [
     (
         "rgb",
-        "plan",
-        "the default run: the plane sweep's depth from 5 RGB views",
+        "plan --no-fuse",
+        "the top-down GQ-CNN on the plane sweep's depth from 5 RGB views",
     ),
     (
         "depth",
-        "plan --depth-from rendered",
-        "the same planner on a perfect depth camera",
+        "plan --no-fuse --depth-from rendered",
+        "the top-down GQ-CNN on a perfect depth camera",
     ),
     (
         "rgb-fused",
-        "plan --fuse",
-        "the multi-view planner on the plane sweep's depth",
+        "plan",
+        "the default run: the multi-view planner on the plane sweep's depth from 5 RGB views",
     ),
     (
         "depth-fused",
-        "plan --fuse --depth-from rendered",
+        "plan --depth-from rendered",
         "the multi-view planner on rendered depth",
     ),
     (
         "lsm",
-        "plan --depth-from lsm",
-        "the Learnt Stereo Machine's depth",
+        "plan --no-fuse --depth-from lsm",
+        "the top-down GQ-CNN on the Learnt Stereo Machine's depth",
     ),
     (
         "lsm-fused",
-        "plan --fuse --depth-from lsm",
+        "plan --depth-from lsm",
         "the multi-view planner on the LSM's depth",
     ),
     (
         "mvs",
-        "plan --depth-from mvs",
-        "the multi-view stereo network's depth",
+        "plan --no-fuse --depth-from mvs",
+        "the top-down GQ-CNN on the multi-view stereo network's depth",
     ),
     (
         "mvs-fused",
-        "plan --fuse --depth-from mvs",
+        "plan --depth-from mvs",
         "the multi-view planner on its depth",
     ),
     (
         "refined",
-        "plan --depth-from refined",
-        "the plane sweep refined by its network",
+        "plan --no-fuse --depth-from refined",
+        "the top-down GQ-CNN on the plane sweep refined by its network",
     ),
     (
         "refined-fused",
-        "plan --fuse --depth-from refined",
+        "plan --depth-from refined",
         "the multi-view planner on the refined sweep's depth",
     ),
 ];

@@ -84,7 +84,7 @@ impl EvalConfig {
             per_category: 1,
             data,
             max_meshes: 6,
-            policies: vec!["rgb".into(), "depth".into()],
+            policies: vec!["rgb-fused".into(), "depth-fused".into()],
             seeds: vec![0],
             all_poses: false,
             coverage: false,

@@ -14,7 +14,7 @@ pub use mvgrasp_planner::{
     ImageSamplerParams, Mask, Occupancy, Plan, ScoredGrasp, ShippedModel, View, ViewSetting,
     VirtualScorer, VirtualViewParams, models, sample_image_grasps, theta_rad,
 };
-pub use options::{FUSED_VIEWS, PlanOptions};
+pub use options::{ChanceSource, FUSED_VIEWS, PlanOptions};
 pub use pipeline::{
     AnalyticCheck, PlanParams, PlanReport, PlanTimings, RgbInput, Scene, check_grasp, check_grasps,
     plan_grasp, render_rgb, render_scene,

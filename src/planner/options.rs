@@ -8,7 +8,8 @@ use mvgrasp_geometry::{Intrinsics, IntrinsicsPreset};
 use mvgrasp_grasp::Gripper;
 use mvgrasp_infer::Gqcnn;
 use mvgrasp_planner::{
-    CemParams, DepthSource, FusionParams, GqcnnPolicy, ViewSetting, VirtualScorer, models,
+    CemParams, DepthSource, FusionParams, GqcnnPolicy, HoldProbability, ScoredGrasp, ViewSetting,
+    VirtualScorer, models,
 };
 
 use crate::error::{Error, Result};
@@ -17,6 +18,43 @@ use crate::planner::{DepthFrom, DepthPredictor, PlanParams, RgbInput, SensorPlan
 /// Views the multi-view planner fuses unless told otherwise (the seed paper's setting, the
 /// first top-down).
 pub const FUSED_VIEWS: usize = 5;
+
+/// Where the chance to hold of a plan's best grasp comes from
+/// ([`PlanOptions::chance_source`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ChanceSource {
+    /// The top-down GQ-CNN's quality mapped to the trial's outcomes on this depth source
+    /// ([`HoldProbability`], `models/probability_topdown.json`).
+    Mapped(DepthSource),
+    /// The multi-view planner's quality: its ranker's modelled chance to hold
+    /// ([`mvgrasp_planner::Ranker`], `models/ranker_fused.json`).
+    Ranker,
+}
+
+impl ChanceSource {
+    /// The chance to hold of `best`, planned by a planner with this source; `None` when the
+    /// multi-view planner's best was not ranked (no re-score).
+    ///
+    /// # Errors
+    /// Only if the shipped map is broken (a test loads it).
+    pub fn of(self, best: &ScoredGrasp) -> Result<Option<f32>> {
+        Ok(match self {
+            Self::Ranker => best.virtual_quality.map(|_| best.quality),
+            Self::Mapped(depth) => Some(HoldProbability::shipped()?.of(best.quality, depth)),
+        })
+    }
+
+    /// Where the figure comes from, in words for a summary.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Self::Ranker => "the ranker's model of the trial's outcomes: models/ranker_fused.json",
+            Self::Mapped(_) => {
+                "the quality mapped to the trial's outcomes on the development set: \
+                 models/probability_topdown.json"
+            }
+        }
+    }
+}
 
 /// What a plan is asked to do (`plan`'s options; the Python `Planner`'s keywords).
 #[derive(Clone, Debug, PartialEq)]
@@ -95,6 +133,16 @@ impl PlanOptions {
             Some(DepthFrom::Baseline) => Some(DepthSource::Sweep),
             Some(_) => None,
         }
+    }
+
+    /// Where the chance to hold of these options' best grasp comes from, planned with the
+    /// network `model` (`sensor`: on a depth camera's image): the multi-view planner's ranker
+    /// (without CEM), or the top-down GQ-CNN's map where [`Self::hold_source`] has one.
+    pub fn chance_source(&self, model: &str, sensor: bool) -> Option<ChanceSource> {
+        if self.fuse && !self.cem {
+            return Some(ChanceSource::Ranker);
+        }
+        self.hold_source(model, sensor).map(ChanceSource::Mapped)
     }
 
     /// The shipped network these options plan with when none is named: the multi-view GQ-CNN

@@ -3,8 +3,10 @@ images (one or several, with or without camera poses) and on meshes, returning a
 :class:`PlanResult` of dataclasses and the same ``grasps.json`` as the command.
 
 The keyword arguments carry the command's option names and defaults: ``model`` (a shipped
-network or an export's ``NAME.json``; default the top-down GQ-CNN, or the multi-view GQ-CNN
-with ``fuse``), ``fuse`` (the multi-view planner), ``cem``, ``hand_check`` (``--no-hand-check``
+network or an export's ``NAME.json``; default the multi-view GQ-CNN for the multi-view
+planner, else the top-down GQ-CNN), ``fuse`` (the multi-view planner: ``None``, the default,
+is the command's choice: fused over several views and on a mesh, the top-down GQ-CNN alone on
+one depth image; ``False`` is ``--no-fuse``, ``True`` ``--fuse``), ``cem``, ``hand_check`` (``--no-hand-check``
 is ``hand_check=False``), ``seed``; on meshes also ``camera``, ``views``, ``distance_m``,
 ``stable_pose``, ``physics`` (``--no-physics``) and ``backend``. The GIL is released while a
 plan runs.
@@ -89,9 +91,10 @@ class PlanResult:
     grasps_json: str = field(repr=False)
     table: Optional[dict[str, Any]] = None
     report: Optional[dict[str, Any]] = field(default=None, repr=False)
-    #: On a mesh with the top-down GQ-CNN and the default views (rendered depth or the plane
-    #: sweep's): the best grasp's chance to hold, its quality mapped to the trial's outcomes
-    #: (``models/probability_topdown.json``, as ``plan`` prints it); else ``None``.
+    #: On a mesh, as ``plan`` prints it: the best grasp's chance to hold, the multi-view
+    #: planner's ranked quality (``models/ranker_fused.json``) or, for the top-down GQ-CNN with
+    #: the default views (rendered depth or the plane sweep's), its quality mapped to the
+    #: trial's outcomes (``models/probability_topdown.json``); else ``None``.
     hold_probability: Optional[float] = None
 
     @property
@@ -192,7 +195,7 @@ class Planner:
         self,
         *,
         model: Optional[str] = None,
-        fuse: bool = False,
+        fuse: Optional[bool] = None,
         cem: bool = False,
         hand_check: bool = True,
         seed: int = 0,
@@ -203,10 +206,12 @@ class Planner:
         self.hand_check = hand_check
         self.seed = seed
 
-    def _options(self) -> dict[str, Any]:
+    def _options(self, several_views: bool) -> dict[str, Any]:
+        """The native planner's keywords; ``several_views``: the input has several views (or
+        is a mesh), where the multi-view planner is the default."""
         return {
             "model": self.model,
-            "fuse": self.fuse,
+            "fuse": several_views if self.fuse is None else self.fuse,
             "cem": self.cem,
             "hand_check": self.hand_check,
             "seed": self.seed,
@@ -239,7 +244,7 @@ class Planner:
             mask=None if mask is None else as_dtype(mask, bool, "mask"),
             world_from_camera=optional_f64(world_from_camera, "world_from_camera"),
             as_json=True,
-            **self._options(),
+            **self._options(several_views=False),
         )
         return PlanResult._of(text, {"total_s": time.perf_counter() - started})
 
@@ -260,7 +265,7 @@ class Planner:
             *_posed(cameras),
             masks=_masks(masks),
             as_json=True,
-            **self._options(),
+            **self._options(several_views=True),
         )
         return PlanResult._of(text, {"total_s": time.perf_counter() - started})
 
@@ -281,7 +286,7 @@ class Planner:
         for i, (image, c) in enumerate(zip(images, cameras)):
             _check_size(f"images[{i}]", image, c, f"cameras[{i}]")
         started = time.perf_counter()
-        options = self._options()
+        options = self._options(several_views=True)
         options.pop("fuse")
         text = _native.plan_rgb(
             [as_dtype(image, np.uint8, f"images[{i}]") for i, image in enumerate(images)],
@@ -309,9 +314,9 @@ class Planner:
         """Plans on a mesh as ``plan --mesh --depth-from DEPTH_FROM`` does: rests it on the
         table in a stable pose, renders the views' depth (``"rendered"``, the default here) or
         renders them in colour and predicts their depth (``"baseline"``, the CLI's default,
-        ``"mvs"`` or ``"lsm"``: 5 views unless ``views`` says otherwise, the top-down GQ-CNN
-        planning in the first, top-down one, or the multi-view planner in all with
-        ``fuse=True``), plans, and
+        ``"refined"``, ``"mvs"`` or ``"lsm"``: 5 views unless ``views`` says otherwise), plans
+        (the multi-view planner over the views; with ``fuse=False`` the top-down GQ-CNN in
+        the first, top-down one), and
         checks the best grasp analytically and (with ``physics``) in the rapier trial
         (:attr:`PlanResult.physics`). Timings per stage."""
         started = time.perf_counter()
@@ -325,7 +330,7 @@ class Planner:
             physics=physics,
             backend=backend,
             depth_from=depth_from,
-            **self._options(),
+            **self._options(several_views=True),
         )
         timings = dict(result["timings"], total_s=time.perf_counter() - started)
         return PlanResult._of(

@@ -1,14 +1,16 @@
 //! `plan`: the main job. With no arguments it rests the built-in default object (a procedural
 //! mug) on a table in its most probable stable pose, renders 5 colour views of it (the first
-//! top-down) 0.7 m away, predicts their depth from the colour images alone
+//! top-down) 0.65 m away, predicts their depth from the colour images alone
 //! (`DepthFrom::DEFAULT`: the predictor whose grasps held most often on held-out objects),
-//! plans a grasp with the shipped top-down GQ-CNN in the top-down view, lifts it to the world,
-//! and checks it analytically (robust Ferrari-Canny, collision) and in physics (rapier: close,
-//! lift, shake); the same run on the rendered (true) depth is printed beside it. `--out DIR`
-//! writes `grasps.json`, the overlays, the MCAP log and `views.png` (the colour views above
-//! their predicted depth, the best grasps drawn in every view). `--depth-from rendered` plans
-//! on a depth camera's view instead (one top-down view 0.7 m away), `--fuse` with the
-//! multi-view planner, `--depth-from refined|mvs|lsm|baseline` with another predictor.
+//! plans a grasp with the multi-view planner (the views fused, candidates from every view and
+//! the fused points, ranked by their modelled chance to hold: the planner whose grasps held
+//! most often on held-out objects, on depth and on RGB), and checks it analytically (robust
+//! Ferrari-Canny, collision) and in physics (rapier: close, lift, shake); the same run on the
+//! rendered (true) depth is printed beside it. `--out DIR` writes `grasps.json`, the overlays,
+//! the MCAP log and `views.png` (the colour views above their predicted depth, the best grasps
+//! drawn in every view). `--depth-from rendered` plans on a depth camera's views instead,
+//! `--no-fuse` with the top-down GQ-CNN alone in the top-down view (0.7 m away),
+//! `--depth-from refined|mvs|lsm|baseline` with another predictor.
 //!
 //! `--depth FILE --intrinsics FILE [--camera-pose FILE] [--mask FILE]` plans on a sensor's
 //! depth image instead: the table is fitted in the image (the world is put on it when the
@@ -26,9 +28,9 @@ use mvgrasp::grasps_file::{GraspsFile, write_contact_sheet, write_overlay};
 use mvgrasp::infer::Gqcnn;
 use mvgrasp::mcap_log::write_plan_log;
 use mvgrasp::planner::{
-    DepthFrom, DepthPredictor, DepthSource, GqcnnPolicy, HoldProbability, ObjectSource,
-    PlanOptions, PlanParams, PlanReport, ScoredGrasp, SensorFiles, SensorPlanParams, View, models,
-    plan_grasp, plan_on_rgb_dir, plan_on_sensor_depth, plan_on_views_dir,
+    ChanceSource, DepthFrom, DepthPredictor, GqcnnPolicy, ObjectSource, PlanOptions, PlanParams,
+    PlanReport, ScoredGrasp, SensorFiles, SensorPlanParams, View, models, plan_grasp,
+    plan_on_rgb_dir, plan_on_sensor_depth, plan_on_views_dir,
 };
 use mvgrasp::render::{Backend, Renderer};
 use mvgrasp::{ObjectReport, ReportParams};
@@ -47,19 +49,26 @@ struct Args {
     #[arg(long, default_value = "phoxi_s")]
     camera: String,
     /// The network: a shipped one (gqcnn_small_topdown, gqcnn_small_multiview) or an export's
-    /// JSON (training/: NAME.json beside NAME.safetensors). Default: gqcnn_small_topdown; with
-    /// --fuse, gqcnn_small_multiview (it proposes the candidates of every view).
+    /// JSON (training/: NAME.json beside NAME.safetensors). Default: gqcnn_small_multiview for
+    /// the multi-view planner (it proposes the candidates of every view); gqcnn_small_topdown
+    /// with --no-fuse and on a depth image.
     #[arg(long)]
     model: Option<String>,
     /// The multi-view planner: the views (5 unless --views says otherwise, the first
     /// top-down, 0.65 m away) fused into one model of the scene; every candidate's open hand
     /// checked against it (nothing observed, no unseen space, above the table); the best 10 of
     /// each view re-scored by the top-down GQ-CNN on virtual views along their approaches (the
-    /// mean over 4 perturbed copies) and ranked by the shipped ranker's chance to hold.
-    #[arg(long)]
+    /// mean over 4 perturbed copies) and ranked by the shipped ranker's chance to hold. The
+    /// default for a mesh's views and for folders of views; with --depth, on the one image.
+    #[arg(long, conflicts_with = "no_fuse")]
     fuse: bool,
-    /// Plan in the first N of the 10 test views (1: the top-down view alone). Default: 1 for a
-    /// GQ-CNN, 10 for a multi-view GQ-CNN.
+    /// Plan with the GQ-CNN alone, the views not fused: the top-down GQ-CNN in the top-down
+    /// view 0.7 m away (the seed paper's single-view planner), or a multi-view GQ-CNN in each
+    /// view on its own (`--model gqcnn_small_multiview`: the seed paper's multi-view policy).
+    #[arg(long, conflicts_with = "rgb")]
+    no_fuse: bool,
+    /// Plan in the first N of the 10 test views (1: the top-down view alone). Default: 5 for
+    /// the multi-view planner; with --no-fuse, 1 for a GQ-CNN, 10 for a multi-view GQ-CNN.
     #[arg(long)]
     views: Option<usize>,
     /// Camera distance from the object, metres. Default: 0.7 for a GQ-CNN, 0.65 for a
@@ -75,9 +84,10 @@ struct Args {
     #[arg(long)]
     no_physics: bool,
     /// Answer "no grasp" (exit code 3, the outputs still written) unless the best grasp's
-    /// chance to hold reaches this (0 to 1): the top-down GQ-CNN's quality mapped to the
-    /// trial's outcomes (`models/probability_topdown.json`), for the default run's settings on
-    /// the plane sweep's or rendered depth, and for a depth camera's image
+    /// chance to hold reaches this (0 to 1): the multi-view planner's modelled chance (its
+    /// ranker, `models/ranker_fused.json`); with --no-fuse, the top-down GQ-CNN's quality
+    /// mapped to the trial's outcomes (`models/probability_topdown.json`) for the default
+    /// run's settings on the plane sweep's or rendered depth, and for a depth camera's image
     #[arg(long)]
     min_probability: Option<f32>,
     /// Return the best-scored grasp without checking the open hand against the observed depth.
@@ -115,7 +125,7 @@ struct Args {
     /// Plan on RGB views instead: a folder with `cameras.json` (the cameras posed in the table
     /// frame, as `render` writes them) and per camera `NNN_rgb.png`, optionally `NNN_mask.png`
     /// (a `render` dataset's `test` folder is one); their depth predicted (`--depth-from`),
-    /// then the multi-view planner (`--fuse` implied).
+    /// then the multi-view planner.
     #[arg(long, conflicts_with_all = ["depth", "mesh", "views", "distance_m", "stable_pose", "views_dir"])]
     rgb: Option<PathBuf>,
     /// How the depth planned on is made from RGB views (at least 2): `baseline`, the classical
@@ -124,8 +134,8 @@ struct Args {
     /// and a confidence per pixel); `mvs`, the shipped multi-view stereo network; `lsm`, the
     /// shipped Learnt Stereo Machine; or, for a built-in object or a mesh, `rendered` (true depth, a depth
     /// camera). On a mesh the views are rendered in colour (random colours), their depth
-    /// predicted, the top-down GQ-CNN plans in the top-down one (`--fuse`: the multi-view
-    /// planner in all), and the summary also gives the same run on the rendered depth.
+    /// predicted, the multi-view planner plans over them (`--no-fuse`: the top-down GQ-CNN in
+    /// the top-down one), and the summary also gives the same run on the rendered depth.
     #[arg(long, conflicts_with_all = ["depth", "views_dir"])]
     depth_from: Option<String>,
     /// On a mesh, render the colour views with the photographic look (textured, glossy,
@@ -170,7 +180,8 @@ struct Report<'a> {
     /// `lsm`, `baseline` or `rendered`: the depth planned on.
     depth_from: &'a str,
     plan: &'a PlanReport,
-    /// The best grasp's chance to hold ([`HoldProbability`]), where this planner has one.
+    /// The best grasp's chance to hold (the multi-view planner's ranker, or the top-down
+    /// GQ-CNN's mapped quality), where this planner has one.
     #[serde(skip_serializing_if = "Option::is_none")]
     hold_probability: Option<f32>,
     /// With depth from RGB: the same run on the rendered (true) depth.
@@ -178,23 +189,23 @@ struct Report<'a> {
     on_rendered_depth: Option<&'a PlanReport>,
 }
 
-/// The best grasp's chance to hold, planned on `source` (`None`: this planner has no map).
+/// The best grasp's chance to hold from `source` (`None`: this planner has none, or the best
+/// was not ranked).
 fn hold_probability(
     best: Option<&ScoredGrasp>,
-    source: Option<DepthSource>,
+    source: Option<ChanceSource>,
 ) -> Result<Option<f32>, String> {
     let (Some(best), Some(source)) = (best, source) else {
         return Ok(None);
     };
-    let map = HoldProbability::shipped().map_err(|e| e.to_string())?;
-    Ok(Some(map.of(best.quality, source)))
+    source.of(best).map_err(|e| e.to_string())
 }
 
 /// `--min-probability`: checked before planning (a value in [0, 1], and a planner with a
-/// map); after it, whether the best grasp reaches it, with a line saying why not.
+/// chance to hold); after it, whether the best grasp reaches it, with a line saying why not.
 fn check_min_probability(
     args: &Args,
-    source: Option<DepthSource>,
+    source: Option<ChanceSource>,
     chance: Option<f32>,
 ) -> Result<(bool, String), String> {
     let Some(min) = args.min_probability else {
@@ -207,9 +218,9 @@ fn check_min_probability(
     }
     if source.is_none() {
         return Err(
-            "--min-probability: only the top-down GQ-CNN with the default run's \
-                    settings (on the plane sweep's or rendered depth) or on a depth camera's \
-                    image has a chance to hold"
+            "--min-probability: only the multi-view planner and the top-down GQ-CNN with \
+                    the default run's settings (on the plane sweep's or rendered depth) or on \
+                    a depth camera's image have a chance to hold"
                 .into(),
         );
     }
@@ -260,7 +271,7 @@ fn run(args: &Args) -> Result<bool, String> {
         ..options_of(args)
     };
     let (model_name, net) = load_model(&model_of(args))?;
-    let source = options.hold_source(&model_name, false);
+    let source = options.chance_source(&model_name, false);
     check_min_probability(args, source, None)?;
     let (policy, params) = options.on_mesh(net).map_err(|e| e.to_string())?;
     let backend = Backend::parse(&args.backend).ok_or_else(|| {
@@ -308,7 +319,7 @@ fn run(args: &Args) -> Result<bool, String> {
                 (options.fuse, params.plan_views)
             )
         );
-        print!("{}", chance_words(chance));
+        print!("{}", chance_words(chance, source));
         if let (Some(from), Some(truth)) = (options.depth_from, &on_truth) {
             print!("{}", truth_comparison(from, &plan, truth));
         }
@@ -331,13 +342,11 @@ fn run(args: &Args) -> Result<bool, String> {
 }
 
 /// The summary's line on the best grasp's chance to hold (none without one).
-fn chance_words(chance: Option<f32>) -> String {
-    chance.map_or_else(String::new, |p| {
-        format!(
-            "chance to hold: {p:.2} (the quality mapped to the trial's outcomes on the \
-             development set: models/probability_topdown.json)\n"
-        )
-    })
+fn chance_words(chance: Option<f32>, source: Option<ChanceSource>) -> String {
+    match (chance, source) {
+        (Some(p), Some(source)) => format!("chance to hold: {p:.2} ({})\n", source.describe()),
+        _ => String::new(),
+    }
 }
 
 /// Writes `grasps.json` and, for each of `views`, a picture of `grasps` over its depth
@@ -381,10 +390,16 @@ fn depth_from_of(args: &Args) -> Result<Option<DepthFrom>, String> {
 
 /// The options every kind of plan shares.
 fn options_of(args: &Args) -> PlanOptions {
-    // A folder of RGB views goes to the multi-view planner (its views need not hold a top-down
-    // one); a mesh's predicted views to the top-down GQ-CNN in the top-down one, unless --fuse.
+    // Views (a mesh's, a folder of depth or RGB views) go to the multi-view planner, whose
+    // grasps held most often on held-out objects on depth and on RGB, unless --no-fuse; one
+    // depth image to the top-down GQ-CNN, unless --fuse.
+    let fuse = if args.depth.is_some() {
+        args.fuse
+    } else {
+        !args.no_fuse
+    };
     PlanOptions {
-        fuse: args.fuse || args.rgb.is_some(),
+        fuse,
         cem: args.cem,
         hand_check: !args.no_hand_check,
         seed: args.object.seed,
@@ -413,7 +428,7 @@ fn sensor_setup(
 /// `plan --depth`: a grasp on a sensor's depth image; `Ok(false)` when none was found.
 fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<bool, String> {
     let (model_name, policy, gripper, params) = sensor_setup(args)?;
-    let source = options_of(args).hold_source(&model_name, true);
+    let source = options_of(args).chance_source(&model_name, true);
     check_min_probability(args, source, None)?;
     let files = SensorFiles {
         depth: depth.to_path_buf(),
@@ -430,7 +445,7 @@ fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<bool, String> {
         println!("{}", file.to_json().map_err(|e| e.to_string())?);
     } else {
         print!("{}", sensor_summary(&model_name, &files, &report));
-        print!("{}{verdict}", chance_words(chance));
+        print!("{}{verdict}", chance_words(chance, source));
     }
     if let Some(out) = &args.out {
         write_outputs(out, &file, std::slice::from_ref(&report.view), &report.top)?;
@@ -442,7 +457,8 @@ fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<bool, String> {
 fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
     use std::fmt::Write;
     let (model_name, policy, gripper, params) = sensor_setup(args)?;
-    check_min_probability(args, None, None)?;
+    let source = options_of(args).fuse.then_some(ChanceSource::Ranker);
+    check_min_probability(args, source, None)?;
     let (report, depth) = if args.rgb.is_some() {
         let from = depth_from_of(args)?.unwrap_or(DepthFrom::DEFAULT);
         let predictor = DepthPredictor::shipped(from).map_err(|e| e.to_string())?;
@@ -460,6 +476,8 @@ fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
         (report, String::new())
     };
     let file = GraspsFile::of_views(&report);
+    let chance = hold_probability(report.best.as_ref(), source)?;
+    let (reaches, verdict) = check_min_probability(args, source, chance)?;
     if args.json {
         println!("{}", file.to_json().map_err(|e| e.to_string())?);
     } else {
@@ -521,12 +539,12 @@ fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
                 );
             }
         }
-        print!("{s}");
+        print!("{s}{}{verdict}", chance_words(chance, source));
     }
     if let Some(out) = &args.out {
         write_outputs(out, &file, &report.views, &report.top)?;
     }
-    Ok(report.best.is_some())
+    Ok(report.best.is_some() && reaches)
 }
 
 /// A shipped network by name, or an export's JSON by path.
