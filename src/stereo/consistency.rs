@@ -12,6 +12,7 @@
 //! cup that only the top-down view sees, a face aliased in every view): the caller replaces it
 //! (with the visual hull's depth, which never lies beyond the surface, or with nothing).
 
+use mvgrasp_geometry::rounding::rounded_index;
 use mvgrasp_geometry::{Camera, Pose3};
 use rayon::prelude::*;
 
@@ -44,20 +45,31 @@ pub fn consistent_pixels(
     depths: &[Vec<f32>],
     params: &Consistency,
 ) -> Vec<Vec<bool>> {
+    consistent_where(cameras, depths, params, |_, _| true)
+}
+
+/// [`consistent_pixels`] of the pixels `wanted(view, pixel)` only (the others `false`).
+pub(super) fn consistent_where(
+    cameras: &[Camera],
+    depths: &[Vec<f32>],
+    params: &Consistency,
+    wanted: impl Fn(usize, usize) -> bool + Sync,
+) -> Vec<Vec<bool>> {
     let camera_from_world: Vec<Pose3> = cameras
         .iter()
         .map(|c| c.world_from_camera.inverse())
         .collect();
+    // Pixel by pixel in parallel, whatever the number of views.
     (0..cameras.len())
-        .into_par_iter()
         .map(|r| {
             let k = &cameras[r].intrinsics;
             let w = k.width as usize;
             depths[r]
-                .iter()
+                .par_iter()
                 .enumerate()
+                .with_min_len(1024)
                 .map(|(i, &d)| {
-                    if d <= 0.0 {
+                    if d <= 0.0 || !wanted(r, i) {
                         return false;
                     }
                     let p = cameras[r].unproject((i % w) as f32, (i / w) as f32, d);
@@ -91,11 +103,14 @@ pub fn consistent_pixels(
 fn depth_at(camera: &Camera, depth: &[f32], z: f32, uv: Option<[f32; 2]>) -> Option<f32> {
     let [u, v] = uv?;
     let k = &camera.intrinsics;
-    let (u, v) = (u.round(), v.round());
-    if !(z > 0.0 && u >= 0.0 && v >= 0.0 && u < k.width as f32 && v < k.height as f32) {
+    let (Some(u), Some(v), true) = (
+        rounded_index(u, k.width as usize),
+        rounded_index(v, k.height as usize),
+        z > 0.0,
+    ) else {
         return None;
-    }
-    let found = depth[v as usize * k.width as usize + u as usize];
+    };
+    let found = depth[v * k.width as usize + u];
     (found > 0.0).then_some(found)
 }
 

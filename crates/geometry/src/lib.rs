@@ -7,6 +7,7 @@ pub mod objects;
 pub mod properties;
 pub mod raycast;
 pub mod resting;
+pub mod rounding;
 pub mod stable_poses;
 pub mod views;
 

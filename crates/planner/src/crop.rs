@@ -15,7 +15,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::depth_image::DepthImage;
-use crate::rounding::floor;
+use mvgrasp_geometry::rounding::floor;
 
 /// How a grasp's crop is cut (Dex-Net 2.0: a 96 x 96 window scaled to 32 x 32).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

@@ -17,7 +17,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::depth_image::View;
-use crate::rounding::{round, rounded_index};
+use mvgrasp_geometry::rounding::{round, rounded_index};
 
 /// A box's lower and upper corners, world.
 type Bounds = (Vec3, Vec3);

@@ -13,7 +13,6 @@ pub mod policy;
 pub mod probability;
 pub mod ranker;
 pub mod reconstruct;
-mod rounding;
 pub mod sampler;
 pub mod seed;
 pub mod table;

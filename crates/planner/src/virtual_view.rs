@@ -25,8 +25,8 @@ use crate::error::{PlannerError, Result};
 use crate::fusion::{Fusion, POINT_BUCKET_M};
 use crate::policy::{GqcnnPolicy, Plan, ScoredGrasp};
 use crate::ranker::Ranker;
-use crate::rounding::rounded_index;
 use crate::seed::splitmix;
+use mvgrasp_geometry::rounding::rounded_index;
 
 /// Salts the scorer's own proposals' seed apart from the planner's.
 const PROPOSE_SALT: u64 = 0x70d0_5eed;

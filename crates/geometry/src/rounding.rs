@@ -1,13 +1,14 @@
-//! Rounding without libm calls, to the bit of `f32::floor` and `f32::round`: the crate is built
-//! for baseline x86-64, where `floorf` and `roundf` are calls, and the planner's inner loops
-//! (nine samples a crop pixel, two roundings a point of a virtual crop, two a cell and view of
-//! the space carving) spent a sixth to a third of their time in them. Each is tested against
+//! Rounding without libm calls, to the bit of `f32::floor` and `f32::round`: the workspace is
+//! built for baseline x86-64, where `floorf` and `roundf` are calls, and the planner's inner
+//! loops (nine samples a crop pixel, two roundings a point of a virtual crop, two a cell and view
+//! of the space carving) spent a sixth to a third of their time in them; the plane sweep's
+//! consistency check rounds two coordinates a pixel and view. Each is tested against
 //! the libm form over halves, their neighbours and sweeps.
 
 /// `x.floor()` for a finite `x`, the same value to the bit. Values of 2^23 or more are integers
 /// already.
 #[inline]
-pub(crate) fn floor(x: f32) -> f32 {
+pub fn floor(x: f32) -> f32 {
     if x.abs() >= 8_388_608.0 {
         return x;
     }
@@ -18,7 +19,7 @@ pub(crate) fn floor(x: f32) -> f32 {
 /// `x.round() as i64`: truncation, then away from zero where the (exactly computed) fraction is
 /// a half or more. Values of 2^23 or more (and NaN, as `as` takes it: 0) go through `as` alone.
 #[inline]
-pub(crate) fn round(x: f32) -> i64 {
+pub fn round(x: f32) -> i64 {
     if x.is_nan() || x.abs() >= 8_388_608.0 {
         return x as i64;
     }
@@ -30,7 +31,7 @@ pub(crate) fn round(x: f32) -> i64 {
 /// `x.round()` as an index below `size`, or `None` where it falls outside `0..size` or `x` is
 /// not a number.
 #[inline]
-pub(crate) fn rounded_index(x: f32, size: usize) -> Option<usize> {
+pub fn rounded_index(x: f32, size: usize) -> Option<usize> {
     let r = round(x);
     (!x.is_nan() && r >= 0 && (r as usize) < size).then_some(r as usize)
 }
