@@ -279,13 +279,13 @@ fn plan_says_why_it_returns_no_grasp() {
     );
 }
 
-/// The default run's grasp carries its chance to hold (the multi-view planner's ranker; with
+/// The default run's grasp carries its chance to hold (the multi-view planner's ranker, mapped; with
 /// `--no-fuse` the top-down GQ-CNN's mapped quality); `--min-probability` above it answers no
 /// grasp (exit code 3) with that chance, at 0 the grasp is returned.
 #[test]
 fn plan_answers_no_grasp_below_the_chance_asked_for() {
     for (planner, model) in [
-        (&[][..], "models/ranker_fused.json"),
+        (&[][..], "models/probability_fused.json"),
         (&["--no-fuse"][..], "models/probability_topdown.json"),
     ] {
         let args = |more: &[&'static str]| [&["--no-physics"][..], planner, more].concat();

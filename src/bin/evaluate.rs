@@ -35,7 +35,8 @@ struct Args {
     #[arg(long)]
     full: bool,
     /// An object set (repeat): held-out (built-in objects past every training index), dev
-    /// (built-in, where settings are chosen), real (every real mesh of --data), or
+    /// (built-in, where settings are chosen), real (every real mesh of --data), dev-real (50
+    /// of pybullet's random_urdfs in --data, real meshes where settings are chosen), or
     /// folder:PATH. Default: held-out and real.
     #[arg(long = "set")]
     sets: Vec<String>,
@@ -45,7 +46,7 @@ struct Args {
     /// The shared mesh folder (`real` takes every real mesh found there).
     #[arg(long, default_value = "../shared/data/meshes")]
     data: PathBuf,
-    /// At most this many meshes of each file set (real, folder:PATH; 0: all; default 6,
+    /// At most this many meshes of each file set (real, dev-real, folder:PATH; 0: all; default 6,
     /// --full: all).
     #[arg(long)]
     max_meshes: Option<usize>,

@@ -6,12 +6,12 @@
 use mvgrasp_geometry::{Pose3, RestingPoses, Vec3};
 use mvgrasp_grasp::physics::{FailureStage, PhysicsObject};
 use mvgrasp_grasp::{AnalysisConfig, GraspObject, Gripper, analyse, label_grasps};
-use mvgrasp_planner::{DepthSource, HoldProbability, tilt_rad};
+use mvgrasp_planner::tilt_rad;
 use mvgrasp_render::Renderer;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::planner::{DepthFrom, GqcnnPolicy, PlanOptions, PlanParams, plan_grasp};
+use crate::planner::{ChanceSource, DepthFrom, GqcnnPolicy, PlanOptions, PlanParams, plan_grasp};
 
 /// A planner as the evaluation names it: `plan`'s options.
 #[derive(Clone, Debug, PartialEq)]
@@ -341,8 +341,8 @@ impl ReadyPolicy {
             seed,
             outcome,
             quality: best.map(|b| b.quality),
-            probability: match (best, self.hold_source()) {
-                (Some(b), Some(source)) => Some(HoldProbability::shipped()?.of(b.quality, source)),
+            probability: match (best, self.chance_source()) {
+                (Some(b), Some(source)) => source.of(&b)?,
                 _ => None,
             },
             robust: report.analytic.map(|a| a.robust),
@@ -351,10 +351,10 @@ impl ReadyPolicy {
         })
     }
 
-    /// The depth source whose hold probability applies to this policy's grasps, if any.
-    fn hold_source(&self) -> Option<DepthSource> {
+    /// Where the chance to hold of this policy's grasps comes from, if anywhere.
+    fn chance_source(&self) -> Option<ChanceSource> {
         let options = &self.policy.options;
-        options.hold_source(options.default_model(), false)
+        options.chance_source(options.default_model(), false)
     }
 
     /// The gripper the policy plans for.

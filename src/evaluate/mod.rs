@@ -31,7 +31,7 @@ use objects::{ObjectRef, ObjectSet};
 /// folder's `config.json`; a folder holding another config's records is refused.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EvalConfig {
-    /// Object sets by name ([`ObjectSet`]: held-out, dev, real, folder:PATH).
+    /// Object sets by name ([`ObjectSet`]: held-out, dev, real, dev-real, folder:PATH).
     pub sets: Vec<String>,
     /// Built-in objects per category in the built-in sets.
     pub per_category: u32,

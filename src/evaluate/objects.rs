@@ -46,6 +46,10 @@ pub const HELD_OUT_FIRST_INDEX: u32 = 30;
 /// The first built-in index of the development set, which settings may be chosen on.
 pub const DEV_FIRST_INDEX: u32 = 50;
 
+/// The real development set: every this-many of pybullet's 1,000 `random_urdfs` (procedural
+/// "blob" meshes, 1 to 21 cm; none is trained on or in an evaluation set).
+pub const DEV_REAL_STRIDE: usize = 20;
+
 /// A set of objects to evaluate on, as named on the command line.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum ObjectSet {
@@ -56,6 +60,10 @@ pub enum ObjectSet {
     /// `real`: every real mesh of the shared mesh folder ([`REAL_MESHES`] and the household
     /// set's manifest); none when the folder is absent.
     Real,
+    /// `dev-real`: real meshes that settings may be chosen on, apart from every evaluation
+    /// and training set: pybullet's `random_urdfs` 000, 020, ... 980 ([`DEV_REAL_STRIDE`]);
+    /// none when the shared folder is absent.
+    DevReal,
     /// `folder:PATH`: every OBJ, STL and URDF file in a folder (not its subfolders).
     Folder(PathBuf),
 }
@@ -68,10 +76,11 @@ impl std::str::FromStr for ObjectSet {
             "held-out" => Ok(Self::HeldOut),
             "dev" => Ok(Self::Dev),
             "real" => Ok(Self::Real),
+            "dev-real" => Ok(Self::DevReal),
             _ => match name.strip_prefix("folder:") {
                 Some(path) if !path.is_empty() => Ok(Self::Folder(PathBuf::from(path))),
                 _ => Err(format!(
-                    "{name:?}: expected held-out, dev, real or folder:PATH"
+                    "{name:?}: expected held-out, dev, real, dev-real or folder:PATH"
                 )),
             },
         }
@@ -85,6 +94,7 @@ impl ObjectSet {
             Self::HeldOut => "held-out".into(),
             Self::Dev => "dev".into(),
             Self::Real => "real".into(),
+            Self::DevReal => "dev-real".into(),
             Self::Folder(path) => format!("folder:{}", path.display()),
         }
     }
@@ -173,6 +183,18 @@ pub fn objects(set: &ObjectSet, per_category: u32, data: &Path) -> Result<Vec<Ob
                 })
                 .collect()
         }
+        ObjectSet::DevReal => (0..1000)
+            .step_by(DEV_REAL_STRIDE)
+            .map(|i| format!("pybullet/random_urdfs/{i:03}/{i:03}.urdf"))
+            .map(|file| (data.join(&file), file))
+            .filter(|(path, _)| path.is_file())
+            .map(|(path, file)| ObjectRef {
+                name: file,
+                set: set.name(),
+                group: "random_urdfs".into(),
+                source: Source::File(path),
+            })
+            .collect(),
         ObjectSet::Folder(folder) => {
             let mut files: Vec<PathBuf> = std::fs::read_dir(folder)
                 .map_err(Error::io("list", folder))?
@@ -243,8 +265,35 @@ mod tests {
         );
         let wrong = "heldout".parse::<ObjectSet>().unwrap_err();
         assert!(
-            wrong.contains("held-out, dev, real or folder:PATH"),
+            wrong.contains("held-out, dev, real, dev-real or folder:PATH"),
             "{wrong}"
+        );
+    }
+
+    #[test]
+    fn the_real_development_set_takes_every_twentieth_random_urdf_found() {
+        let data = tempfile::tempdir().unwrap();
+        for i in ["000", "001", "020", "040"] {
+            let dir = data.path().join("pybullet/random_urdfs").join(i);
+            std::fs::create_dir_all(&dir).unwrap();
+            std::fs::write(dir.join(format!("{i}.urdf")), "<robot/>").unwrap();
+        }
+        // 040's folder without its file: not found, left out.
+        std::fs::remove_file(data.path().join("pybullet/random_urdfs/040/040.urdf")).unwrap();
+        let set = objects(&ObjectSet::DevReal, 5, data.path()).unwrap();
+        let names: Vec<_> = set.iter().map(|o| o.name.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "pybullet/random_urdfs/000/000.urdf",
+                "pybullet/random_urdfs/020/020.urdf"
+            ]
+        );
+        assert!(set.iter().all(|o| o.set == "dev-real" && !o.is_builtin()));
+        assert!(
+            objects(&ObjectSet::DevReal, 5, Path::new("/nonexistent"))
+                .unwrap()
+                .is_empty()
         );
     }
 

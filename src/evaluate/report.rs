@@ -387,7 +387,9 @@ fn calibration_table(md: &mut String, results: &Results) {
          predicted quality: grasps returned and tried, their mean quality, the share that held. \
          ECE: the expected calibration error, the bins' |mean quality - share held| weighted \
          by their grasps. \"Chance to hold\": the quality mapped to the trial's outcomes on the \
-         development set (models/probability_topdown.json), binned the same way.\n"
+         development set (models/probability_topdown.json for the top-down GQ-CNN, \
+         models/probability_fused.json for the multi-view planner's ranker), binned the same \
+         way.\n"
     );
     let mut header = String::from("| policy |");
     let mut lower = 0.0;

@@ -8,8 +8,8 @@ use mvgrasp_geometry::{Intrinsics, IntrinsicsPreset};
 use mvgrasp_grasp::Gripper;
 use mvgrasp_infer::Gqcnn;
 use mvgrasp_planner::{
-    CemParams, DepthSource, FusionParams, GqcnnPolicy, HoldProbability, ScoredGrasp, ViewSetting,
-    VirtualScorer, models,
+    CemParams, DepthSource, FusionParams, GqcnnPolicy, HoldProbability, PlannerKind, ScoredGrasp,
+    ViewSetting, VirtualScorer, models,
 };
 
 use crate::error::{Error, Result};
@@ -26,9 +26,11 @@ pub enum ChanceSource {
     /// The top-down GQ-CNN's quality mapped to the trial's outcomes on this depth source
     /// ([`HoldProbability`], `models/probability_topdown.json`).
     Mapped(DepthSource),
-    /// The multi-view planner's quality: its ranker's modelled chance to hold
-    /// ([`mvgrasp_planner::Ranker`], `models/ranker_fused.json`).
-    Ranker,
+    /// The multi-view planner's quality, its ranker's modelled chance to hold
+    /// ([`mvgrasp_planner::Ranker`], `models/ranker_fused.json`), mapped to the trial's
+    /// outcomes of its best grasps on this depth source (`models/probability_fused.json`);
+    /// `None`: settings no map was fitted for, the ranker's figure as it is.
+    Ranker(Option<DepthSource>),
 }
 
 impl ChanceSource {
@@ -36,18 +38,33 @@ impl ChanceSource {
     /// multi-view planner's best was not ranked (no re-score).
     ///
     /// # Errors
-    /// Only if the shipped map is broken (a test loads it).
+    /// Only if a shipped map is broken (a test loads them).
     pub fn of(self, best: &ScoredGrasp) -> Result<Option<f32>> {
         Ok(match self {
-            Self::Ranker => best.virtual_quality.map(|_| best.quality),
-            Self::Mapped(depth) => Some(HoldProbability::shipped()?.of(best.quality, depth)),
+            Self::Ranker(None) => best.virtual_quality.map(|_| best.quality),
+            Self::Ranker(Some(depth)) => match best.virtual_quality {
+                Some(_) => {
+                    Some(HoldProbability::shipped(PlannerKind::MultiView)?.of(best.quality, depth))
+                }
+                None => None,
+            },
+            Self::Mapped(depth) => {
+                Some(HoldProbability::shipped(PlannerKind::TopDown)?.of(best.quality, depth))
+            }
         })
     }
 
     /// Where the figure comes from, in words for a summary.
     pub fn describe(self) -> &'static str {
         match self {
-            Self::Ranker => "the ranker's model of the trial's outcomes: models/ranker_fused.json",
+            Self::Ranker(None) => {
+                "the ranker's model of the trial's outcomes (models/ranker_fused.json), not mapped: \
+                 no map was fitted for these settings"
+            }
+            Self::Ranker(Some(_)) => {
+                "the ranker's model of the trial's outcomes, mapped to its best grasps' outcomes \
+                 on the development set: models/ranker_fused.json, models/probability_fused.json"
+            }
             Self::Mapped(_) => {
                 "the quality mapped to the trial's outcomes on the development set: \
                  models/probability_topdown.json"
@@ -112,14 +129,14 @@ impl Default for PlanOptions {
 }
 
 impl PlanOptions {
-    /// The depth source whose hold probability ([`mvgrasp_planner::HoldProbability`]) applies to the grasps of
-    /// these options planned with the shipped top-down GQ-CNN (`model`: the network's name):
-    /// on a mesh, the settings it was fitted with (one top-down view 0.7 m away, the default
-    /// camera, no fusion, no CEM, the flat look) on rendered depth or the plane sweep's;
-    /// `sensor`: a depth camera's image, planned without fusion or CEM. `None` otherwise.
+    /// The depth source whose hold probability ([`mvgrasp_planner::HoldProbability`]) applies
+    /// to the grasps of these options planned with the network `model` (its name): the shipped
+    /// network of the planner ([`Self::default_model`]), no CEM, and on a mesh the settings the
+    /// maps were fitted with (the planner's own views and distance, the default camera, the
+    /// flat look) on rendered depth or the plane sweep's; `sensor`: a depth camera's image.
+    /// `None` otherwise.
     pub fn hold_source(&self, model: &str, sensor: bool) -> Option<DepthSource> {
-        let planner = model == models::GQCNN_TOPDOWN.name && !self.fuse && !self.cem;
-        if !planner {
+        if model != self.default_model() || self.cem {
             return None;
         }
         if sensor {
@@ -137,12 +154,36 @@ impl PlanOptions {
 
     /// Where the chance to hold of these options' best grasp comes from, planned with the
     /// network `model` (`sensor`: on a depth camera's image): the multi-view planner's ranker
-    /// (without CEM), or the top-down GQ-CNN's map where [`Self::hold_source`] has one.
+    /// (without CEM), mapped where [`Self::hold_source`] has a map, or the top-down GQ-CNN's
+    /// map where it has one.
     pub fn chance_source(&self, model: &str, sensor: bool) -> Option<ChanceSource> {
-        if self.fuse && !self.cem {
-            return Some(ChanceSource::Ranker);
+        let source = self.hold_source(model, sensor);
+        match self.fuse {
+            true if !self.cem => Some(ChanceSource::Ranker(source)),
+            true => None,
+            false => source.map(ChanceSource::Mapped),
         }
-        self.hold_source(model, sensor).map(ChanceSource::Mapped)
+    }
+
+    /// [`Self::chance_source`] of a plan over a folder of a camera's views (`plan
+    /// --views-dir`): depth images, or RGB views whose depth `rgb` predicts. Only the
+    /// multi-view planner has one there (the top-down maps were fitted on one view), mapped on
+    /// depth images and on the plane sweep's depth.
+    pub fn chance_source_on_views(
+        &self,
+        model: &str,
+        rgb: Option<DepthFrom>,
+    ) -> Option<ChanceSource> {
+        let source = match rgb {
+            None => Some(DepthSource::Camera),
+            Some(DepthFrom::Baseline) => Some(DepthSource::Sweep),
+            Some(_) => None,
+        };
+        match self.chance_source(model, true)? {
+            ChanceSource::Ranker(Some(_)) => Some(ChanceSource::Ranker(source)),
+            ChanceSource::Ranker(None) => Some(ChanceSource::Ranker(None)),
+            ChanceSource::Mapped(_) => None,
+        }
     }
 
     /// The shipped network these options plan with when none is named: the multi-view GQ-CNN
@@ -259,5 +300,76 @@ impl PlanOptions {
         }
         let gripper = params.labels.gripper()?;
         Ok((self.policy(net, &gripper)?, params))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Which map a plan's chance to hold comes from: each planner's own, only with the
+    /// settings it was fitted with, and never for CEM.
+    #[test]
+    fn the_chance_comes_from_the_map_fitted_for_the_settings() {
+        let fused = PlanOptions {
+            fuse: true,
+            ..PlanOptions::default()
+        };
+        let mvgqcnn = models::MVGQCNN.name;
+        let topdown = models::GQCNN_TOPDOWN.name;
+        let with = |depth_from| PlanOptions {
+            depth_from,
+            ..fused.clone()
+        };
+        let ranker = |source| Some(ChanceSource::Ranker(source));
+        assert_eq!(
+            fused.chance_source(mvgqcnn, false),
+            ranker(Some(DepthSource::Camera))
+        );
+        assert_eq!(
+            with(Some(DepthFrom::Baseline)).chance_source(mvgqcnn, false),
+            ranker(Some(DepthSource::Sweep))
+        );
+        // No map for other predictors, views, cameras or another network: the ranker as it is.
+        assert_eq!(
+            with(Some(DepthFrom::Lsm)).chance_source(mvgqcnn, false),
+            ranker(None)
+        );
+        let three = PlanOptions {
+            views: Some(3),
+            ..fused.clone()
+        };
+        assert_eq!(three.chance_source(mvgqcnn, false), ranker(None));
+        assert_eq!(fused.chance_source(topdown, false), ranker(None));
+        let cem = PlanOptions {
+            cem: true,
+            ..fused.clone()
+        };
+        assert_eq!(cem.chance_source(mvgqcnn, false), None);
+        // The top-down planner: its own map, with its own network only.
+        let plain = PlanOptions::default();
+        assert_eq!(
+            plain.chance_source(topdown, false),
+            Some(ChanceSource::Mapped(DepthSource::Camera))
+        );
+        assert_eq!(
+            plain.chance_source(topdown, true),
+            Some(ChanceSource::Mapped(DepthSource::Camera))
+        );
+        assert_eq!(plain.chance_source(mvgqcnn, false), None);
+        // A folder of views: the multi-view planner's map, by what gave the depth.
+        assert_eq!(
+            fused.chance_source_on_views(mvgqcnn, None),
+            ranker(Some(DepthSource::Camera))
+        );
+        assert_eq!(
+            fused.chance_source_on_views(mvgqcnn, Some(DepthFrom::Baseline)),
+            ranker(Some(DepthSource::Sweep))
+        );
+        assert_eq!(
+            fused.chance_source_on_views(mvgqcnn, Some(DepthFrom::Mvs)),
+            ranker(None)
+        );
+        assert_eq!(plain.chance_source_on_views(topdown, None), None);
     }
 }

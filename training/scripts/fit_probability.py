@@ -30,7 +30,11 @@ from pathlib import Path
 import numpy as np
 
 FORMAT = "mvgrasp-probability/1"
-POLICIES = ["rgb", "depth"]
+# Per planner: the evaluate policy whose records fit each depth source's map.
+PLANNERS = {
+    "topdown": {"rgb": "rgb", "depth": "depth"},
+    "fused": {"rgb": "rgb-fused", "depth": "depth-fused"},
+}
 SCORE_FLOOR = 1e-4
 FOLDS = 5
 # The report's bins (src/evaluate/report.rs, QUALITY_BINS): upper ends.
@@ -57,6 +61,24 @@ def read_records(paths: list[Path]) -> list[dict]:
             if str(entry.get("key", "")).startswith("grasp|"):
                 records[entry["key"]] = entry["value"]
     return list(records.values())
+
+
+def graded(rows: list[dict], policy: str) -> list[dict]:
+    """The policy's returned grasps that the trial tested (the object at rest when the hand
+    came)."""
+    return [
+        r
+        for r in rows
+        if r["policy"] == policy and r.get("quality") is not None and r["outcome"] != "toppled"
+    ]
+
+
+def arrays(kept: list[dict]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(logit of the quality, the quality, held as 1.0 or 0.0) of graded records."""
+    q = np.array([r["quality"] for r in kept])
+    x = np.array([logit(v) for v in q])
+    y = np.array([1.0 if r["outcome"] == "held" else 0.0 for r in kept])
+    return x, q, y
 
 
 def fit(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
@@ -112,23 +134,28 @@ def main() -> None:
     parser.add_argument(
         "--min-grasps", type=int, default=20, help="graded grasps wanted per policy (default 20)"
     )
+    parser.add_argument(
+        "--planner", choices=sorted(PLANNERS), default="topdown", help="whose quality to map"
+    )
+    parser.add_argument(
+        "--measure",
+        type=Path,
+        nargs="*",
+        default=[],
+        help="evaluate records to measure the fitted maps on (not fitted on)",
+    )
     args = parser.parse_args()
     rows = read_records(args.records)
+    measured = read_records(args.measure) if args.measure else []
     fitted, report = {}, {}
-    for policy in POLICIES:
-        kept = [
-            r
-            for r in rows
-            if r["policy"] == policy and r.get("quality") is not None and r["outcome"] != "toppled"
-        ]
+    for source, policy in PLANNERS[args.planner].items():
+        kept = graded(rows, policy)
         if len(kept) < max(args.min_grasps, 2):
             sys.exit(
                 f"{policy}: {len(kept)} graded grasps in the records, "
                 f"{max(args.min_grasps, 2)} at least wanted"
             )
-        x = np.array([logit(r["quality"]) for r in kept])
-        q = np.array([r["quality"] for r in kept])
-        y = np.array([1.0 if r["outcome"] == "held" else 0.0 for r in kept])
+        x, q, y = arrays(kept)
         a, b = fit(x, y)
         folds = np.array([bucket(r["object"]) for r in kept])
         crossed = np.zeros_like(y)
@@ -137,8 +164,9 @@ def main() -> None:
             if held_out.any() and (~held_out).any():
                 fa, fb = fit(x[~held_out], y[~held_out])
                 crossed[held_out] = apply(fa, fb, x[held_out])
-        fitted[policy] = {"bias": round(a, 6), "slope": round(b, 6)}
-        report[policy] = {
+        fitted[source] = {"bias": round(a, 6), "slope": round(b, 6)}
+        report[source] = {
+            "policy": policy,
             "grasps": len(kept),
             "objects": len({r["object"] for r in kept}),
             "held": int(y.sum()),
@@ -146,7 +174,16 @@ def main() -> None:
             "ece_fitted": round(ece(apply(a, b, x), y), 4),
             "ece_cross_validated": round(ece(crossed, y), 4),
         }
-        print(f"{policy}: {report[policy]} -> P = sigmoid({a:.3f} + {b:.3f} logit(quality))")
+        print(f"{policy}: {report[source]} -> P = sigmoid({a:.3f} + {b:.3f} logit(quality))")
+        if measured:
+            other = graded(measured, policy)
+            if other:
+                mx, mq, my = arrays(other)
+                print(
+                    f"  measured on {len(other)} grasps of {len({r['object'] for r in other})} "
+                    f"objects ({', '.join(p.name for p in args.measure)}): ECE raw "
+                    f"{ece(mq, my):.4f}, mapped {ece(apply(a, b, mx), my):.4f}"
+                )
     digest = [
         {"file": p.name, "sha256": hashlib.sha256(p.read_bytes()).hexdigest()} for p in args.records
     ]

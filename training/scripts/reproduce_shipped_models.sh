@@ -2,8 +2,8 @@
 # Reproduces the shipped networks of models/ from a clean clone: the grasp and RGB-D datasets
 # they were trained on (training/configs/datasets/, `render`), the five training runs
 # (training/configs/), the exports copied into models/ and the torch-parity fixtures of the
-# Rust tests rewritten, then the fused planner's ranker (training/scripts/fit_ranker.py) and the
-# top-down planner's chance to hold (training/scripts/fit_probability.py).
+# Rust tests rewritten, then the fused planner's ranker (training/scripts/fit_ranker.py) and both
+# planners' chance to hold (training/scripts/fit_probability.py).
 #
 #   training/scripts/reproduce_shipped_models.sh            # about five hours on a 2-core CPU
 #   QUICK=1 training/scripts/reproduce_shipped_models.sh    # minutes: 1 object per category,
@@ -155,24 +155,38 @@ done
 "$python" training/scripts/fit_ranker.py "$data/ranker/fit.jsonl" \
     --validate "$data/ranker/dev.jsonl" --out "$ranker_out"
 
-# The top-down planner's chance to hold (training/scripts/fit_probability.py): the default run
-# and the same planner on rendered depth over the development set (built-in objects 50 to 54
-# of each category, every resting pose, seeds 0 to 2; with the networks and the ranker now
-# compiled into evaluate), a logistic map of the quality to the trial's outcome. About 20
-# minutes here.
-probability_out=$runs/probability_topdown.json
-[[ $quick == 1 ]] || probability_out=models/probability_topdown.json
+# The chance to hold (training/scripts/fit_probability.py), a logistic map of each planner's
+# quality to the trial's outcome, every resting pose, seeds 0 to 2, with the networks and the
+# ranker now compiled into evaluate: the top-down GQ-CNN (the default run with --no-fuse, and on
+# rendered depth) over the development set (built-in objects 50 to 54 of each category), about
+# 20 minutes here; the multi-view planner (the default run, and on rendered depth) over the
+# same objects and the real development set (every 20th of pybullet's random_urdfs in the shared
+# meshes, when present), about 20 minutes.
+topdown_out=$runs/probability_topdown.json
+fused_out=$runs/probability_fused.json
+if [[ $quick == 0 ]]; then
+    topdown_out=models/probability_topdown.json
+    fused_out=models/probability_fused.json
+fi
 probability_seeds=0,1,2
 min_grasps=20
-if [[ $quick == 1 ]]; then probability_seeds=0; min_grasps=2; fi
+dev_real_meshes=0
+if [[ $quick == 1 ]]; then probability_seeds=0; min_grasps=2; dev_real_meshes=2; fi
 cargo build --release --quiet --bin evaluate
-rm -rf "$runs/probability_dev"
+dev_per_category=$(( per_category / 4 > 0 ? per_category / 4 : 1 ))
+rm -rf "$runs/probability_dev" "$runs/probability_fused_dev"
 target/release/evaluate --out "$runs/probability_dev" --set dev \
-    --per-category "$(( per_category / 4 > 0 ? per_category / 4 : 1 ))" \
+    --per-category "$dev_per_category" \
     --seeds "$probability_seeds" --all-poses --policy rgb --policy depth --suite grasps --plain \
     > "$runs/probability_dev.log"
 "$python" training/scripts/fit_probability.py "$runs/probability_dev/records.jsonl" \
-    --out "$probability_out" --min-grasps "$min_grasps"
+    --planner topdown --out "$topdown_out" --min-grasps "$min_grasps"
+target/release/evaluate --out "$runs/probability_fused_dev" --set dev --set dev-real \
+    --per-category "$dev_per_category" --max-meshes "$dev_real_meshes" \
+    --seeds "$probability_seeds" --all-poses --policy rgb-fused --policy depth-fused \
+    --suite grasps --plain > "$runs/probability_fused_dev.log"
+"$python" training/scripts/fit_probability.py "$runs/probability_fused_dev/records.jsonl" \
+    --planner fused --out "$fused_out" --min-grasps "$min_grasps"
 
 if [[ $quick == 1 ]]; then
     echo "QUICK=1: exports in $runs (models/ unchanged)"

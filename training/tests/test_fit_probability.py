@@ -19,13 +19,15 @@ def fit_probability():
     return load_script("fit_probability")
 
 
-def synthetic_records(path: Path, objects: int, seed: int) -> None:
-    """Evaluate's journal lines for both policies: overconfident qualities (most near 1) whose
+def synthetic_records(
+    path: Path, objects: int, seed: int, policies: tuple[str, ...] = ("rgb", "depth")
+) -> None:
+    """Evaluate's journal lines for `policies`: overconfident qualities (most near 1) whose
     true chance to hold is sigmoid(-0.5 + 0.4 logit q), plus toppled and grasp-less records
     that the fit must leave out."""
     rng = np.random.default_rng(seed)
     with open(path, "w") as f:
-        for policy in ["rgb", "depth"]:
+        for policy in policies:
             for o in range(objects):
                 for s in range(3):
                     q = float(1.0 - rng.beta(0.6, 6.0))
@@ -53,6 +55,7 @@ def run(records: Path, out: Path, *extra: str) -> subprocess.CompletedProcess:
     return subprocess.run(
         [sys.executable, str(SCRIPT), str(records), "--out", str(out), *extra],
         capture_output=True,
+        check=False,
         text=True,
     )
 
@@ -99,3 +102,28 @@ def test_too_few_grasps_are_refused(tmp_path):
     assert done.returncode != 0
     assert "graded grasps in the records" in done.stderr
     assert not (tmp_path / "out.json").exists()
+
+
+def test_the_fused_planner_is_fitted_on_its_own_policies_and_measured_elsewhere(tmp_path):
+    dev, other = tmp_path / "dev.jsonl", tmp_path / "held_out.jsonl"
+    fused = ("rgb-fused", "depth-fused")
+    synthetic_records(dev, objects=80, seed=1, policies=fused)
+    synthetic_records(other, objects=40, seed=5, policies=fused)
+    out = tmp_path / "fused.json"
+    # The top-down planner's policies are not in these records.
+    assert run(dev, out).returncode != 0
+    done = run(dev, out, "--planner", "fused", "--measure", str(other))
+    assert done.returncode == 0, done.stderr
+    model = json.loads(out.read_text())
+    assert set(model["policies"]) == {"rgb", "depth"}
+    report = model["training"]["development_set"]
+    assert report["rgb"]["policy"] == "rgb-fused"
+    assert report["depth"]["policy"] == "depth-fused"
+    # The measured set is reported, mapped better than raw, and not fitted on.
+    lines = [line for line in done.stdout.splitlines() if "measured on" in line]
+    assert len(lines) == 2, done.stdout
+    raw, mapped = (float(v) for v in lines[0].split("ECE raw ")[1].split(", mapped "))
+    assert mapped < raw
+    alone = tmp_path / "alone.json"
+    assert run(dev, alone, "--planner", "fused").returncode == 0
+    assert json.loads(alone.read_text())["policies"] == model["policies"]

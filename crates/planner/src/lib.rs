@@ -30,7 +30,7 @@ pub use fusion::{Fusion, FusionParams, Occupancy};
 pub use hand_check::{Rejection, Rejections, check_hand};
 pub use models::{ShippedModel, ViewSetting};
 pub use policy::{GqcnnPolicy, Plan, ScoredGrasp};
-pub use probability::{DepthSource, HoldProbability};
+pub use probability::{DepthSource, HoldProbability, PlannerKind};
 pub use ranker::Ranker;
 pub use sampler::{ImageSamplerParams, sample_image_grasps};
 pub use table::{TableFit, TableFitParams, fit_table, objects_above};

@@ -92,9 +92,10 @@ class PlanResult:
     table: Optional[dict[str, Any]] = None
     report: Optional[dict[str, Any]] = field(default=None, repr=False)
     #: On a mesh, as ``plan`` prints it: the best grasp's chance to hold, the multi-view
-    #: planner's ranked quality (``models/ranker_fused.json``) or, for the top-down GQ-CNN with
-    #: the default views (rendered depth or the plane sweep's), its quality mapped to the
-    #: trial's outcomes (``models/probability_topdown.json``); else ``None``.
+    #: planner's ranked quality (``models/ranker_fused.json``) or the top-down GQ-CNN's
+    #: quality, mapped to the trial's outcomes with the default views on rendered depth or the
+    #: plane sweep's (``models/probability_fused.json``, ``models/probability_topdown.json``);
+    #: else ``None``.
     hold_probability: Optional[float] = None
 
     @property

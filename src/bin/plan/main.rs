@@ -85,9 +85,10 @@ struct Args {
     no_physics: bool,
     /// Answer "no grasp" (exit code 3, the outputs still written) unless the best grasp's
     /// chance to hold reaches this (0 to 1): the multi-view planner's modelled chance (its
-    /// ranker, `models/ranker_fused.json`); with --no-fuse, the top-down GQ-CNN's quality
-    /// mapped to the trial's outcomes (`models/probability_topdown.json`) for the default
-    /// run's settings on the plane sweep's or rendered depth, and for a depth camera's image
+    /// ranker, `models/ranker_fused.json`), with --no-fuse the top-down GQ-CNN's quality, each
+    /// mapped to the trial's outcomes (`models/probability_fused.json`,
+    /// `models/probability_topdown.json`) for the default settings on the plane sweep's or
+    /// rendered depth and for a depth camera's images
     #[arg(long)]
     min_probability: Option<f32>,
     /// Return the best-scored grasp without checking the open hand against the observed depth.
@@ -457,10 +458,13 @@ fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<bool, String> {
 fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
     use std::fmt::Write;
     let (model_name, policy, gripper, params) = sensor_setup(args)?;
-    let source = options_of(args).fuse.then_some(ChanceSource::Ranker);
+    let rgb_from = match args.rgb {
+        Some(_) => Some(depth_from_of(args)?.unwrap_or(DepthFrom::DEFAULT)),
+        None => None,
+    };
+    let source = options_of(args).chance_source_on_views(&model_name, rgb_from);
     check_min_probability(args, source, None)?;
-    let (report, depth) = if args.rgb.is_some() {
-        let from = depth_from_of(args)?.unwrap_or(DepthFrom::DEFAULT);
+    let (report, depth) = if let Some(from) = rgb_from {
         let predictor = DepthPredictor::shipped(from).map_err(|e| e.to_string())?;
         let rgb = plan_on_rgb_dir(&policy, &gripper, dir, &params, &predictor)
             .map_err(|e| e.to_string())?;
