@@ -138,10 +138,7 @@ fn run(args: &Args) -> Result<(), String> {
             mask: None,
         })
         .collect();
-    let gripper = PlanParams::default()
-        .labels
-        .gripper()
-        .map_err(|e| e.to_string())?;
+    let gripper = PlanParams::default().labels.gripper;
     let net = models::GQCNN_TOPDOWN.load().map_err(|e| e.to_string())?;
     let mut policy = GqcnnPolicy::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
     println!(
@@ -209,7 +206,7 @@ fn bench_fused(args: &Args) -> Result<(), String> {
     params.views.radius_m = 0.65;
     params.fusion = Some(FusionParams::default());
     let scene = render_scene(&renderer, &object, &params).map_err(|e| e.to_string())?;
-    let gripper = params.labels.gripper().map_err(|e| e.to_string())?;
+    let gripper = params.labels.gripper.clone();
     let net = models::MVGQCNN.load().map_err(|e| e.to_string())?;
     let mut policy = GqcnnPolicy::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
     let scorer = VirtualScorer::shipped(gripper.max_opening_m).map_err(|e| e.to_string())?;

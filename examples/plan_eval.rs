@@ -401,7 +401,7 @@ fn run(args: &Args) -> Result<(), String> {
                 ..Default::default()
             });
         }
-        let gripper = params.labels.gripper().map_err(|e| e.to_string())?;
+        let gripper = params.labels.gripper.clone();
         let load = |model: ShippedModel| {
             let replacement = if model.name == models::GQCNN_TOPDOWN.name {
                 &args.gqcnn

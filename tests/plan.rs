@@ -13,7 +13,7 @@ use mvgrasp::infer::Gqcnn;
 use mvgrasp::planner::{GqcnnPolicy, PlanParams, PlanReport, ScoredGrasp, models, plan_grasp};
 
 fn policy(model: models::ShippedModel) -> GqcnnPolicy {
-    let gripper = PlanParams::default().labels.gripper().unwrap();
+    let gripper = PlanParams::default().labels.gripper;
     GqcnnPolicy::new(model.load().unwrap(), gripper.max_opening_m).unwrap()
 }
 
@@ -53,7 +53,7 @@ fn labels(
     grasps: &[ScoredGrasp],
     params: &PlanParams,
 ) -> Vec<bool> {
-    let gripper = params.labels.gripper().unwrap();
+    let gripper = params.labels.gripper.clone();
     let world: Vec<_> = grasps.iter().map(|g| g.grasp).collect();
     label_grasps(
         object,

@@ -102,7 +102,7 @@ fn a_grasp_on_each_real_single_object_image_with_and_without_its_mask() {
     };
     let images = root.join("examples/single_object/primesense");
     let intrinsics = root.join("calib/primesense/primesense.intr");
-    let gripper = PlanParams::default().labels.gripper().unwrap();
+    let gripper = PlanParams::default().labels.gripper;
     let policy =
         GqcnnPolicy::new(models::GQCNN_TOPDOWN.load().unwrap(), gripper.max_opening_m).unwrap();
     let params = SensorPlanParams::default();
@@ -144,7 +144,7 @@ fn a_grasp_on_some_object_in_each_real_clutter_image_with_and_without_the_camera
     let Some(root) = shared_data("real_depth/gqcnn/data") else {
         return;
     };
-    let gripper = PlanParams::default().labels.gripper().unwrap();
+    let gripper = PlanParams::default().labels.gripper;
     let policy =
         GqcnnPolicy::new(models::GQCNN_TOPDOWN.load().unwrap(), gripper.max_opening_m).unwrap();
     let params = SensorPlanParams::default();
@@ -206,7 +206,7 @@ fn oblique_rendered_views_find_the_table_and_a_grasp_with_the_pose_withheld() {
     let object = generate_object(Category::Box, 0, 0).unwrap();
     let rest = RestingPoses::of(&object.mesh).unwrap();
     let (_, pose) = rest.get(0).unwrap();
-    let gripper = PlanParams::default().labels.gripper().unwrap();
+    let gripper = PlanParams::default().labels.gripper;
     // The multi-view GQ-CNN: trained on views 10 to 90 degrees above the table.
     let policy = GqcnnPolicy::new(models::MVGQCNN.load().unwrap(), gripper.max_opening_m).unwrap();
     for elevation_deg in [20.0f32, 35.0, 50.0, 65.0, 80.0] {
@@ -550,7 +550,7 @@ fn a_view_in_memory_plans_as_its_files_do() {
     let path = dir.path().join("depth.png");
     write_depth_png(&path, k.width, k.height, &depth);
     let intrinsics = write_intrinsics(dir.path(), "camera.json", &k);
-    let gripper = PlanParams::default().labels.gripper().unwrap();
+    let gripper = PlanParams::default().labels.gripper;
     let policy =
         GqcnnPolicy::new(models::GQCNN_TOPDOWN.load().unwrap(), gripper.max_opening_m).unwrap();
     let params = SensorPlanParams::default();

@@ -6,16 +6,15 @@
 use mvgrasp::grasp::physics::{PhysicsObject, simulate_grasp};
 use mvgrasp::grasp::quality::{grasp_quality as quality_of, robust_qualities};
 use mvgrasp::grasp::{
-    Grasp, GraspObject, Gripper, check_collision as collision_of, sample_antipodal,
+    Grasp, GraspObject, Gripper, LabelSettings, check_collision as collision_of, sample_antipodal,
 };
-use mvgrasp::grasp_dataset::GraspDatasetConfig;
 use pyo3::prelude::*;
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 
 use crate::arrays::{mesh_of, optional_pose, pose_of, poses_of};
 use crate::convert::{from_python, to_python};
-use crate::errors::{grasp_error, pipeline_error};
+use crate::errors::grasp_error;
 
 /// The vertices and triangles arguments (any real and integer dtypes, [`mesh_of`]).
 type Vertices<'py> = Bound<'py, PyAny>;
@@ -26,9 +25,7 @@ type Triangles<'py> = Bound<'py, PyAny>;
 /// [`Gripper`]'s fields (the missing ones the Panda's).
 fn gripper_of(spec: Option<&Bound<'_, PyAny>>) -> PyResult<Gripper> {
     let Some(spec) = spec else {
-        return GraspDatasetConfig::default()
-            .gripper()
-            .map_err(pipeline_error);
+        return Ok(LabelSettings::default().gripper);
     };
     let gripper = if let Ok(name) = spec.extract::<std::path::PathBuf>() {
         Gripper::from_name_or_file(&name.to_string_lossy()).map_err(grasp_error)?
@@ -90,7 +87,7 @@ pub(crate) fn sample_grasps<'py>(
     seed: u64,
 ) -> PyResult<Bound<'py, PyAny>> {
     let gripper = gripper_of(gripper.as_ref())?;
-    let mut params = params_of(params.as_ref(), GraspDatasetConfig::default().sampling)?;
+    let mut params = params_of(params.as_ref(), LabelSettings::default().sampling)?;
     params.target_grasps = count;
     let table = optional_pose("table_from_object", table_from_object.as_ref())?;
     on_object(py, &vertices, &triangles, |object| {
@@ -113,10 +110,7 @@ pub(crate) fn grasp_quality<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let pose = pose_of("object_from_gripper", &object_from_gripper)?;
     let gripper = gripper_of(gripper.as_ref())?;
-    let wrench = params_of(
-        params.as_ref(),
-        GraspDatasetConfig::default().quality.wrench,
-    )?;
+    let wrench = params_of(params.as_ref(), LabelSettings::default().quality.wrench)?;
     on_object(py, &vertices, &triangles, |object| {
         quality_of(object, &pose, &gripper, friction_coef, &wrench)
     })
@@ -137,7 +131,7 @@ pub(crate) fn robust_quality<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let poses = poses_of("object_from_grippers", &object_from_grippers)?;
     let gripper = gripper_of(gripper.as_ref())?;
-    let params = params_of(params.as_ref(), GraspDatasetConfig::default().quality)?;
+    let params = params_of(params.as_ref(), LabelSettings::default().quality)?;
     on_object(py, &vertices, &triangles, |object| {
         robust_qualities(object, &poses, &gripper, &params, seed)
     })
@@ -161,10 +155,7 @@ pub(crate) fn check_collision<'py>(
     let pose = pose_of("object_from_gripper", &object_from_gripper)?;
     let table = optional_pose("table_from_object", table_from_object.as_ref())?;
     let gripper = gripper_of(gripper.as_ref())?;
-    let params = params_of(
-        params.as_ref(),
-        GraspDatasetConfig::default().sampling.collision,
-    )?;
+    let params = params_of(params.as_ref(), LabelSettings::default().sampling.collision)?;
     on_object(py, &vertices, &triangles, |object| {
         Ok(collision_of(
             object,
@@ -198,7 +189,7 @@ pub(crate) fn physics_trial<'py>(
         width_m,
     };
     let gripper = gripper_of(gripper.as_ref())?;
-    let config = GraspDatasetConfig::default();
+    let config = LabelSettings::default();
     let params = params_of(params.as_ref(), config.physics)?;
     on_object(py, &vertices, &triangles, |object| {
         let body = PhysicsObject::from_grasp_object(object, &config.physics_shape)?;

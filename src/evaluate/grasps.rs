@@ -358,11 +358,8 @@ impl ReadyPolicy {
     }
 
     /// The gripper the policy plans for.
-    ///
-    /// # Errors
-    /// A gripper the label settings cannot make.
-    pub fn gripper(&self) -> Result<Gripper> {
-        self.params.labels.gripper()
+    pub fn gripper(&self) -> &Gripper {
+        &self.params.labels.gripper
     }
 
     /// The policy's plan settings.
@@ -391,14 +388,14 @@ pub fn any_grasp_holds(
     params: &PlanParams,
     seed: u64,
 ) -> Result<bool> {
-    let gripper = params.labels.gripper()?;
+    let gripper = &params.labels.gripper;
     let config = AnalysisConfig {
         sampling: params.labels.sampling,
         quality: params.labels.quality.clone(),
         physics: None,
         ..AnalysisConfig::default()
     };
-    let analysis = analyse(object, table_from_object, &gripper, &config, seed)?;
+    let analysis = analyse(object, table_from_object, gripper, &config, seed)?;
     let reachable: Vec<_> = analysis
         .grasps
         .iter()
@@ -414,7 +411,7 @@ pub fn any_grasp_holds(
         object,
         table_from_object,
         &reachable,
-        &gripper,
+        gripper,
         &params.labels.label_params(Some(&body)),
         seed,
     )?;

@@ -302,7 +302,7 @@ fn evaluate_object(
         None => {
             let grasp_object = load(object, &mut loaded)?;
             let rest = rest.insert(RestingPoses::of(grasp_object.mesh())?);
-            let gripper = ready[0].gripper()?;
+            let gripper = ready[0].gripper();
             let mut placed = Vec::new();
             for k in grasps::poses_to_try(rest, config.all_poses) {
                 let (_, pose) = rest.get(k)?;
@@ -373,7 +373,7 @@ fn evaluate_object(
                 grasp_object.mesh(),
                 &pose.table_from_object,
                 &hands,
-                &ready[0].gripper()?,
+                ready[0].gripper(),
             )?;
         }
     }

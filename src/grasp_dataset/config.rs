@@ -5,7 +5,7 @@ use std::path::Path;
 use mvgrasp_geometry::{Intrinsics, IntrinsicsPreset};
 use mvgrasp_grasp::physics::{PhysicsObject, PhysicsParams, ShapeParams};
 use mvgrasp_grasp::quality::RobustQualityParams;
-use mvgrasp_grasp::{GraspError, Gripper, GripperPreset, LabelParams, SamplingParams};
+use mvgrasp_grasp::{GraspError, Gripper, LabelParams, LabelSettings, SamplingParams};
 pub use mvgrasp_planner::CropParams;
 use serde::{Deserialize, Serialize};
 
@@ -60,10 +60,12 @@ pub struct GraspDatasetConfig {
 }
 
 impl Default for GraspDatasetConfig {
+    /// The label settings are [`LabelSettings`]'s defaults, the planner's.
     fn default() -> Self {
+        let labels = LabelSettings::default();
         Self {
             seed: 0,
-            gripper: GripperPreset::Panda.name().to_string(),
+            gripper: labels.gripper.name.clone(),
             intrinsics: IntrinsicsPreset::PhoxiS.name().to_string(),
             cameras: CameraDistribution::TopDown(TopDownCameras::default()),
             stable_poses_per_object: 3,
@@ -75,13 +77,10 @@ impl Default for GraspDatasetConfig {
             physics_fraction: 0.1,
             physics_trials: 1,
             objects_per_shard: 4,
-            sampling: SamplingParams {
-                max_tries: 2000,
-                ..SamplingParams::default()
-            },
-            quality: RobustQualityParams::default(),
-            physics: PhysicsParams::default(),
-            physics_shape: ShapeParams::default(),
+            sampling: labels.sampling,
+            quality: labels.quality,
+            physics: labels.physics,
+            physics_shape: labels.physics_shape,
         }
     }
 }
@@ -306,6 +305,20 @@ impl GraspDatasetConfig {
         })
     }
 
+    /// The gripper and the settings that label this dataset's grasps.
+    ///
+    /// # Errors
+    /// See [`Self::gripper`].
+    pub fn label_settings(&self) -> Result<LabelSettings> {
+        Ok(LabelSettings {
+            gripper: self.gripper()?,
+            sampling: self.sampling,
+            quality: self.quality.clone(),
+            physics: self.physics.clone(),
+            physics_shape: self.physics_shape,
+        })
+    }
+
     /// How this config labels grasps ([`mvgrasp_grasp::label_grasps`]), with a rapier trial on
     /// `body` when given.
     pub fn label_params<'a>(&'a self, body: Option<&'a PhysicsObject>) -> LabelParams<'a> {
@@ -365,6 +378,19 @@ mod tests {
             },
             topdown
         );
+    }
+
+    /// The planner checks its choice with the settings that labelled the shipped networks'
+    /// datasets, and sees with their camera: its quality is the chance the check measures.
+    #[test]
+    fn the_planner_checks_and_sees_as_the_shipped_datasets_were_labelled() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("training/configs/datasets");
+        let planner = crate::planner::PlanParams::default();
+        for name in ["topdown.toml", "multiview.toml", "multiview_large.toml"] {
+            let config = GraspDatasetConfig::from_file(&dir.join(name)).unwrap();
+            assert_eq!(config.label_settings().unwrap(), planner.labels, "{name}");
+            assert_eq!(config.intrinsics().unwrap(), planner.intrinsics, "{name}");
+        }
     }
 
     #[test]

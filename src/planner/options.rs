@@ -212,7 +212,7 @@ impl PlanOptions {
     /// # Errors
     /// A network that does not fit the gripper, or shipped weights that cannot be loaded.
     pub fn on_depth(&self, net: Gqcnn) -> Result<(GqcnnPolicy, Gripper, SensorPlanParams)> {
-        let gripper = PlanParams::default().labels.gripper()?;
+        let gripper = PlanParams::default().labels.gripper;
         let policy = self.policy(net, &gripper)?;
         let params = SensorPlanParams {
             hand_check: self.hand_check,
@@ -298,8 +298,8 @@ impl PlanOptions {
         if self.fuse {
             params.fusion = Some(FusionParams::default());
         }
-        let gripper = params.labels.gripper()?;
-        Ok((self.policy(net, &gripper)?, params))
+        let policy = self.policy(net, &params.labels.gripper)?;
+        Ok((policy, params))
     }
 }
 

@@ -7,7 +7,7 @@ use mvgrasp_geometry::{
     Camera, HemisphereLayout, Intrinsics, IntrinsicsPreset, Pose3, RestingPoses, TriangleMesh,
 };
 use mvgrasp_grasp::physics::{PhysicsObject, PhysicsOutcome};
-use mvgrasp_grasp::{GraspLabel, GraspObject, Gripper, PaperGrasp, label_grasps};
+use mvgrasp_grasp::{GraspLabel, GraspObject, Gripper, LabelSettings, PaperGrasp, label_grasps};
 use mvgrasp_render::{Colors, Renderer, random_colors};
 use serde::Serialize;
 
@@ -15,7 +15,6 @@ use crate::convert::{render_view, rgb_view_of};
 use crate::dataset::photoreal::render_photoreal;
 use crate::dataset::{OBJECT_ID, SceneData, TABLE_HALF_SIDE_M, splitmix};
 use crate::error::Result;
-use crate::grasp_dataset::GraspDatasetConfig;
 use crate::grasp_dataset::object::render_depths;
 use crate::planner::rgb::{DepthPredictor, predict_views};
 use crate::stereo::RgbView;
@@ -42,9 +41,10 @@ pub struct PlanParams {
     pub stable_pose: usize,
     /// Seeds the cameras and the sampler.
     pub seed: u64,
-    /// The gripper, quality, collision and physics settings: the grasp dataset's, so that the
-    /// check measures what the network was trained to predict.
-    pub labels: GraspDatasetConfig,
+    /// The gripper, sampling, quality, collision and physics settings: the shipped grasp
+    /// datasets' by default, so that the check measures what the networks were trained to
+    /// predict.
+    pub labels: LabelSettings,
     /// Run the rapier trial on the best grasp.
     pub physics: bool,
     /// Before a grasp is returned, reject candidates whose open hand meets a point some view
@@ -65,16 +65,15 @@ pub struct PlanParams {
 
 impl Default for PlanParams {
     fn default() -> Self {
-        let labels = GraspDatasetConfig::default();
         Self {
             views: HemisphereLayout::paper_test(),
             max_views: usize::MAX,
             plan_views: None,
-            // The grasp datasets' camera (`GraspDatasetConfig::default().intrinsics`).
+            // The grasp datasets' camera (a test in `grasp_dataset::config` checks both).
             intrinsics: Intrinsics::preset(IntrinsicsPreset::PhoxiS),
             stable_pose: 0,
             seed: 0,
-            labels,
+            labels: LabelSettings::default(),
             physics: true,
             hand_check: true,
             depth_from_rgb: None,
@@ -352,7 +351,7 @@ pub fn plan_grasp(
     params: &PlanParams,
 ) -> Result<PlanReport> {
     let object = GraspObject::new(mesh.clone())?;
-    let gripper = params.labels.gripper()?;
+    let gripper = &params.labels.gripper;
     let started = Instant::now();
     let scene = render_scene(renderer, &object, params)?;
     let render_s = started.elapsed().as_secs_f64();
@@ -367,7 +366,7 @@ pub fn plan_grasp(
     let plan = policy.plan_checked(
         views,
         fusion.as_ref(),
-        &gripper,
+        gripper,
         params.hand_check,
         TOP_KEPT,
         params.seed,
@@ -377,7 +376,7 @@ pub fn plan_grasp(
     let started = Instant::now();
     let best = plan.best().copied();
     let label = best
-        .map(|best| check_grasp(&object, &scene.table_from_object, &best, &gripper, params))
+        .map(|best| check_grasp(&object, &scene.table_from_object, &best, gripper, params))
         .transpose()?;
     let check_s = started.elapsed().as_secs_f64();
     // Every view, planned in or not (a view only predicting depth has no candidate).
@@ -418,18 +417,4 @@ pub fn plan_grasp(
         scene_views: scene.views,
         rgb_views: scene.rgb,
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_planner_sees_with_the_camera_its_networks_were_trained_with() {
-        let params = PlanParams::default();
-        assert_eq!(
-            Ok(params.intrinsics),
-            params.labels.intrinsics().map_err(|_| ())
-        );
-    }
 }

@@ -10,10 +10,11 @@ use serde::Serialize;
 use crate::collision::{CollisionParams, check_collision};
 use crate::error::Result;
 use crate::grasp::Grasp;
-use crate::gripper::Gripper;
+use crate::gripper::{Gripper, GripperPreset};
 use crate::object::GraspObject;
-use crate::physics::{PhysicsObject, PhysicsOutcome, PhysicsParams, simulate_grasp};
+use crate::physics::{PhysicsObject, PhysicsOutcome, PhysicsParams, ShapeParams, simulate_grasp};
 use crate::quality::{RobustQuality, RobustQualityParams, robust_qualities};
+use crate::sampling::SamplingParams;
 
 /// What labels a grasp.
 #[derive(Clone, Copy, Debug)]
@@ -24,6 +25,51 @@ pub struct LabelParams<'a> {
     pub collision: &'a CollisionParams,
     /// A rapier trial of each grasp, when given (with the object's physics body).
     pub physics: Option<(&'a PhysicsParams, &'a PhysicsObject)>,
+}
+
+/// Everything that decides how grasps on an object are found and judged: the gripper, the
+/// antipodal sampler, the label and the rapier trial. The default is the shipped grasp
+/// datasets' (the Panda hand; 2,000 sampling tries; Dex-Net 2.0's robust quality), so that a
+/// planner checking its choice with it measures what its networks were trained to predict.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LabelSettings {
+    /// The gripper.
+    pub gripper: Gripper,
+    /// Antipodal sampling (friction cone, tries, duplicates, collision margins).
+    pub sampling: SamplingParams,
+    /// Robust quality (Dex-Net 2.0's perturbations and label threshold).
+    pub quality: RobustQualityParams,
+    /// The physics trial.
+    pub physics: PhysicsParams,
+    /// How the physics trial shapes the object.
+    pub physics_shape: ShapeParams,
+}
+
+impl Default for LabelSettings {
+    fn default() -> Self {
+        Self {
+            gripper: Gripper::preset(GripperPreset::Panda),
+            sampling: SamplingParams {
+                max_tries: 2000,
+                ..SamplingParams::default()
+            },
+            quality: RobustQualityParams::default(),
+            physics: PhysicsParams::default(),
+            physics_shape: ShapeParams::default(),
+        }
+    }
+}
+
+impl LabelSettings {
+    /// How these settings label grasps ([`label_grasps`]), with a rapier trial on `body` when
+    /// given.
+    pub fn label_params<'a>(&'a self, body: Option<&'a PhysicsObject>) -> LabelParams<'a> {
+        LabelParams {
+            quality: &self.quality,
+            collision: &self.sampling.collision,
+            physics: body.map(|body| (&self.physics, body)),
+        }
+    }
 }
 
 /// A grasp's label and what it rests on.

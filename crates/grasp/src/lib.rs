@@ -19,7 +19,7 @@ pub use error::{GraspError, Result};
 pub use grasp::{Grasp, ImageGrasp, PaperGrasp};
 pub use gripper::{Gripper, GripperPreset};
 pub use gripper_urdf::{UrdfGripper, UrdfGripperSpec};
-pub use label::{GraspLabel, LabelParams, label_grasps};
+pub use label::{GraspLabel, LabelParams, LabelSettings, label_grasps};
 pub use object::GraspObject;
 pub use sampling::{
     AntipodalAxis, SampledGrasp, SamplingParams, SamplingReport, canonical_frame, sample_antipodal,
