@@ -10,7 +10,7 @@
 //!     [--refiner RUN/sweep_refiner_small.json]
 //! ```
 //!
-//! `--photo` renders the views with the photographic look (`mvgrasp::dataset::photoreal`:
+//! `--photo` renders the views with the photographic look (`mvgrasp::scene::photoreal`:
 //! textures, gloss, room lights, a background, sensor noise, blur and JPEG) instead of random
 //! colours under each camera's headlight.
 //!
@@ -31,7 +31,6 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use clap::Parser;
-use mvgrasp::dataset::photoreal::render_photoreal;
 use mvgrasp::evaluate::depth::DepthErrors;
 use mvgrasp::geometry::objects::{Category, generate};
 use mvgrasp::geometry::{HemisphereLayout, Intrinsics, IntrinsicsPreset, RestingPoses};
@@ -40,6 +39,7 @@ use mvgrasp::lsm::lsm_depths;
 use mvgrasp::mvs::mvs_depths;
 use mvgrasp::planner::{DepthPredictor, RgbInput, models, render_rgb};
 use mvgrasp::render::{Backend, Renderer};
+use mvgrasp::scene::photoreal::render_photoreal;
 use mvgrasp::stereo::{RgbView, SweepParams, sweep_depths};
 use mvgrasp::sweep_refiner::RefinedSweep;
 

@@ -1,4 +1,4 @@
-//! A contact sheet of the photographic look (`mvgrasp::dataset::photoreal`) beside the
+//! A contact sheet of the photographic look (`mvgrasp::scene::photoreal`) beside the
 //! datasets' flat one: each row one built-in object of the sweep refiner's library (seed 2) in
 //! a random resting pose, its first column the flat look of the first camera, then that camera
 //! and the next ones in the photographic look, each tile the middle of a PhoXi S view 0.6 m
@@ -14,12 +14,12 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Parser;
-use mvgrasp::dataset::photoreal::render_photoreal;
-use mvgrasp::dataset::write_png8;
 use mvgrasp::geometry::objects::{Category, generate};
 use mvgrasp::geometry::{HemisphereLayout, Intrinsics, IntrinsicsPreset, RestingPoses};
+use mvgrasp::images::write_png8;
 use mvgrasp::planner::{DepthPredictor, RgbInput, render_rgb};
 use mvgrasp::render::{Backend, Renderer};
+use mvgrasp::scene::photoreal::render_photoreal;
 use mvgrasp::stereo::SweepParams;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;

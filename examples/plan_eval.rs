@@ -142,7 +142,7 @@ struct Args {
     #[arg(long)]
     rgb_per_face: bool,
     /// The RGB policies' views are rendered with the photographic look
-    /// (`mvgrasp::dataset::photoreal`) instead of the flat one.
+    /// (`mvgrasp::scene::photoreal`) instead of the flat one.
     #[arg(long)]
     photo: bool,
     /// Try every re-scored candidate of the fused policies in physics and write one JSON line

@@ -4,7 +4,7 @@
 //! samples), coloured at random per vertex or per triangle; in half the samples the plane
 //! sweep runs on cameras moved by up to 2 mm and 0.5 degrees (a rig's calibration error), in
 //! the other half on the true ones; with `--photo-share P`, a share P of the samples is
-//! rendered with the photographic look (`mvgrasp::dataset::photoreal`: textures, gloss, room
+//! rendered with the photographic look (`mvgrasp::scene::photoreal`: textures, gloss, room
 //! lights, background, sensor noise, blur, JPEG) instead of the flat one; each of up to
 //! `--views-per-sample` of the views is written as `SSSSS_V.npy`: float32
 //! `[FEATURES + 2, h, w]`, the refiner's features (`mvgrasp::sweep_refiner::view_features`)
@@ -25,13 +25,13 @@ use std::process::ExitCode;
 mod common;
 
 use clap::Parser;
-use mvgrasp::dataset::photoreal::render_photoreal;
 use mvgrasp::geometry::objects::{Category, generate};
 use mvgrasp::geometry::{
     Camera, HemisphereLayout, Intrinsics, IntrinsicsPreset, Pose3, RestingPoses, Rot3, Vec3,
 };
 use mvgrasp::planner::{DepthPredictor, RgbInput, render_rgb};
 use mvgrasp::render::{Backend, Renderer};
+use mvgrasp::scene::photoreal::render_photoreal;
 use mvgrasp::stereo::{RgbView, sweep_depths};
 use mvgrasp::sweep_refiner::{FEATURES, RefinedSweep, view_features};
 use rand::{RngExt, SeedableRng};

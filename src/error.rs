@@ -114,7 +114,7 @@ pub enum Error {
         /// What is wrong.
         problem: String,
     },
-    /// A photographic look that cannot be applied ([`crate::dataset::photoreal`]).
+    /// A photographic look that cannot be applied ([`crate::scene::photoreal`]).
     #[error("photographic look: {problem}")]
     Photo {
         /// What is wrong.

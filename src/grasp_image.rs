@@ -10,8 +10,8 @@ use mvgrasp_render::{Backend, Colors, IDENTITY, Material, MeshInput, Renderer, S
 use parry3d::shape::Cuboid;
 
 use crate::convert::{render_view, row_major, sides_of};
-use crate::dataset::images::write_png8;
 use crate::error::Result;
+use crate::images::write_png8;
 
 /// Colours of the grasps, best first: green, blue, orange, purple, cyan, then grey.
 pub const GRASP_COLORS: [[u8; 3]; 5] = [

@@ -19,9 +19,9 @@ use mvgrasp_planner::{DepthImage, Rejections, ScoredGrasp, TableFit};
 use serde::Serialize;
 
 use crate::convert::row_major;
-use crate::dataset::images::write_png8;
 use crate::error::{Error, Result};
 use crate::grasp_image::GRASP_COLORS;
+use crate::images::write_png8;
 use crate::planner::{PlanReport, SensorPlanReport, ViewsPlanReport};
 
 /// The `format` of `grasps.json`.

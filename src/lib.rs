@@ -1,9 +1,9 @@
 //! mvgrasp: 6-DoF parallel-jaw grasp planning from a few RGB cameras, on a laptop CPU.
 //!
 //! This root crate is the pipeline (`planner::plan_grasp`: render the views of an object at
-//! rest on a table, plan on their depth with a shipped GQ-CNN, check the best grasp
-//! analytically and in physics), the RGB-D and grasp dataset generators, and the command-line
-//! tools; the work is done by the layered crates it re-exports (see ARCHITECTURE.md):
+//! rest on a table ([`scene`]), plan on their depth with a shipped GQ-CNN, check the best grasp
+//! analytically and in physics) and, above it and never imported by it (a test checks), the
+//! RGB-D and grasp dataset generators, the evaluation and the command-line tools; the work is done by the layered crates it re-exports (see ARCHITECTURE.md):
 //! [`geometry`], [`render`], [`grasp`], [`infer`], and `mvgrasp_planner` (planning on depth
 //! images from any source; its types are re-exported in [`planner`]). Depth comes from the
 //! renderer or a sensor, or is predicted from RGB views: the plane sweep ([`stereo`], the
@@ -18,11 +18,13 @@ pub mod evaluate;
 pub mod grasp_dataset;
 pub mod grasp_image;
 pub mod grasps_file;
+pub mod images;
 pub mod lsm;
 pub mod mcap_log;
 pub mod mvs;
 pub mod planner;
 pub mod report;
+pub mod scene;
 pub mod sensor_files;
 pub mod stereo;
 pub mod sweep_refiner;

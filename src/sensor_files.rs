@@ -324,7 +324,7 @@ mod tests {
         depth: png::BitDepth,
         data: &[u8],
     ) {
-        crate::dataset::images::encode(path, width, height, color, depth, data).unwrap();
+        crate::images::encode(path, width, height, color, depth, data).unwrap();
     }
 
     #[test]

@@ -188,3 +188,92 @@ fn the_planner_cannot_reach_the_dataset_generators_or_the_renderer() {
     let violations = check(rule.0, &dependencies(&manifest), rule.2, rule.3);
     assert_eq!(violations.len(), 2, "{violations:?}");
 }
+
+/// The root package's modules above the runtime: the dataset generators, the evaluation and the
+/// command-line tools. Every other module of `src/` is the runtime (views -> depth ->
+/// candidates -> checks -> grasps, and its files), which must not import these.
+const ABOVE_THE_RUNTIME: &[&str] = &["dataset", "grasp_dataset", "evaluate", "cli", "bin"];
+
+/// The `crate::` paths of `source`'s code (comments left out) that name a module above the
+/// runtime: `crate::dataset::...`, and `crate::{dataset, ...}` in a grouped import.
+fn upward_imports(source: &str) -> Vec<String> {
+    let code: String = source
+        .lines()
+        .filter(|line| !line.trim_start().starts_with("//"))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let mut found = Vec::new();
+    for (at, _) in code.match_indices("crate::") {
+        let rest = &code[at + "crate::".len()..];
+        let names: Vec<&str> = match rest.strip_prefix('{') {
+            Some(group) => group[..group.find('}').unwrap_or(group.len())]
+                .split(',')
+                .map(|item| item.trim().split("::").next().unwrap_or(""))
+                .collect(),
+            None => vec![
+                rest.split(|c: char| !(c.is_alphanumeric() || c == '_'))
+                    .next()
+                    .unwrap_or(""),
+            ],
+        };
+        found.extend(
+            names
+                .into_iter()
+                .filter(|name| ABOVE_THE_RUNTIME.contains(name))
+                .map(|name| format!("crate::{name}")),
+        );
+    }
+    found
+}
+
+fn rust_files(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            rust_files(&path, out);
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            out.push(path);
+        }
+    }
+}
+
+#[test]
+fn the_runtime_imports_no_dataset_generator_evaluation_or_cli() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    files.sort();
+    let mut violations = Vec::new();
+    let mut runtime_files = 0;
+    for file in &files {
+        let relative = file.strip_prefix(&src).unwrap();
+        let top = relative.components().next().unwrap().as_os_str();
+        let top = top.to_str().unwrap().trim_end_matches(".rs");
+        if ABOVE_THE_RUNTIME.contains(&top) || top == "lib" {
+            continue;
+        }
+        runtime_files += 1;
+        let text = std::fs::read_to_string(file).unwrap();
+        for path in upward_imports(&text) {
+            violations.push(format!("src/{} uses {path}", relative.display()));
+        }
+    }
+    assert!(runtime_files > 10, "{runtime_files} runtime files found");
+    assert!(
+        violations.is_empty(),
+        "the runtime reaches above itself:\n{}",
+        violations.join("\n")
+    );
+}
+
+#[test]
+fn the_module_checker_catches_an_upward_import() {
+    let source = "//! See [`crate::dataset`].\n\
+                  use crate::{error::Result, grasp_dataset::GraspDatasetConfig};\n\
+                  use crate::scene::SceneData;\n\
+                  fn f() { crate::evaluate::run(); }\n";
+    assert_eq!(
+        upward_imports(source),
+        ["crate::grasp_dataset", "crate::evaluate"]
+    );
+}

@@ -10,21 +10,20 @@ use common::renderer;
 use std::path::{Path, PathBuf};
 
 use mvgrasp::convert::render_view;
-use mvgrasp::dataset::{
-    DatasetConfig, OBJECT_ID, ObjectSource, PlacedObject, SceneData, write_dataset,
-};
+use mvgrasp::dataset::{DatasetConfig, ObjectSource, PlacedObject, write_dataset};
 use mvgrasp::geometry::objects::{Category, ObjectSpec};
 use mvgrasp::geometry::{HemisphereLayout, Intrinsics, RayCaster, TriangleMesh, Vec3, load_mesh};
 use mvgrasp::render::Renderer;
+use mvgrasp::scene::OBJECT_ID;
 
 /// Fraction of object pixels (away from silhouette and occlusion edges) whose rendered depth is
 /// within 1 mm of the ray cast, over the paper's 10 test views.
 fn agreement(renderer: &Renderer, mesh: TriangleMesh) -> (f64, usize) {
     let placed = PlacedObject::new(mesh, 0).unwrap();
-    let data = SceneData::new(&placed);
+    let data = placed.scene_data();
     let colors = placed.colors(placed.test_color_seed);
     let scene = renderer
-        .upload(&data.inputs(&placed, &colors, false))
+        .upload(&placed.inputs(&data, &colors, false))
         .unwrap();
     let world_mesh = placed.mesh.transformed(&placed.table_from_object);
     let caster = RayCaster::new(&world_mesh).unwrap();

@@ -8,11 +8,11 @@ use std::process::Command;
 
 use mvgrasp::geometry::objects::{Category, generate as generate_object};
 use mvgrasp::geometry::{Camera, Intrinsics, IntrinsicsPreset, RestingPoses, Vec3};
-use mvgrasp::grasp_dataset::render_depths;
 use mvgrasp::planner::{
     DepthImage, GqcnnPolicy, PlanParams, SensorFiles, SensorPlanParams, View, models,
     plan_on_sensor_depth, plan_on_view, read_view, read_views_dir,
 };
+use mvgrasp::scene::render_depths;
 
 use crate::shared_data::shared_data;
 

@@ -4,8 +4,9 @@
 use std::sync::{Arc, Mutex, PoisonError};
 
 use mvgrasp::convert::render_view;
-use mvgrasp::dataset::{DatasetConfig, SceneData, TABLE_HALF_SIDE_M, write_dataset};
+use mvgrasp::dataset::{DatasetConfig, write_dataset};
 use mvgrasp::render::{Backend, Colors, Renderer};
+use mvgrasp::scene::{SceneData, TABLE_HALF_SIDE_M};
 use mvgrasp_geometry::{Camera, Intrinsics, IntrinsicsPreset, Pose3};
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyValueError;

@@ -15,14 +15,9 @@
 //! Each object is written into `.<object>.partial/` and renamed when complete, so an
 //! interrupted run leaves no half object; a rerun skips finished objects.
 
-pub(crate) mod images;
-pub mod photoreal;
 mod scene;
 
-pub use images::{DEPTH_PNG_UNITS_PER_M, write_depth_png, write_png8};
-pub use scene::{
-    ColorMode, OBJECT_ID, PlacedObject, SceneData, TABLE_HALF_SIDE_M, TABLE_ID, name_hash, splitmix,
-};
+pub use scene::{ColorMode, PlacedObject, name_hash, splitmix};
 
 use std::path::{Path, PathBuf};
 
@@ -34,6 +29,8 @@ use serde::Serialize;
 
 use crate::convert::render_view;
 use crate::error::{Error, Result};
+use crate::images::{DEPTH_PNG_UNITS_PER_M, write_depth_png, write_png8};
+use crate::scene::{OBJECT_ID, TABLE_ID};
 
 /// Where an object comes from.
 #[derive(Clone, Debug, PartialEq)]
@@ -277,13 +274,13 @@ fn write_object(
             placed.test_color_seed,
         ),
     ];
-    let data = SceneData::new(&placed);
+    let data = placed.scene_data();
     let mut views = 0;
     for (split, cameras, color_seed) in &splits {
         let dir = partial.join(split);
         std::fs::create_dir_all(&dir).map_err(Error::io("create", &dir))?;
         let colors = placed.colors(*color_seed);
-        let scene = renderer.upload(&data.inputs(&placed, &colors, config.table))?;
+        let scene = renderer.upload(&placed.inputs(&data, &colors, config.table))?;
         let render_views: Vec<_> = cameras.iter().map(render_view).collect();
         let frames = renderer.render(&scene, &render_views)?;
         for (i, frame) in frames.iter().enumerate() {

@@ -3,20 +3,11 @@
 
 use mvgrasp_geometry::{Pose3, RestingPoses, TriangleMesh};
 pub use mvgrasp_planner::seed::{name_hash, splitmix};
-use mvgrasp_render::{Colors, IDENTITY, Material, MeshInput, Sides, random_colors};
+use mvgrasp_render::{Colors, MeshInput, random_colors};
 use serde::Serialize;
 
-use crate::convert::{row_major, sides_of};
 use crate::error::Result;
-
-/// Mask value of the object.
-pub const OBJECT_ID: u8 = 1;
-/// Mask value of the table.
-pub const TABLE_ID: u8 = 2;
-/// The table's colour.
-const TABLE_RGB: [u8; 3] = [150, 150, 150];
-/// Half the side of the datasets' table square, metres.
-pub const TABLE_HALF_SIDE_M: f32 = 0.4;
+use crate::scene::{SceneData, TABLE_HALF_SIDE_M};
 
 /// How an object's surface is coloured.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -78,79 +69,24 @@ impl PlacedObject {
         };
         random_colors(color_seed, n)
     }
-}
 
-/// Owned vertex data for the renderer: an object's mesh in its pose, and a table square.
-pub struct SceneData {
-    positions: Vec<[f32; 3]>,
-    world_from_object: [[f32; 4]; 4],
-    table_positions: [[f32; 3]; 4],
-    sides: Sides,
-}
-
-/// The table's two triangles.
-const TABLE_TRIANGLES: [[u32; 3]; 2] = [[0, 1, 2], [0, 2, 3]];
-
-impl SceneData {
-    /// The placed object's vertices and pose, and a table square around it at z = 0.
-    pub fn new(object: &PlacedObject) -> Self {
-        Self::of_mesh(&object.mesh, &object.table_from_object, TABLE_HALF_SIDE_M)
+    /// The vertex data of this object in its pose, and the RGB-D datasets' table around it.
+    pub fn scene_data(&self) -> SceneData {
+        SceneData::of_mesh(&self.mesh, &self.table_from_object, TABLE_HALF_SIDE_M)
     }
 
-    /// `mesh` at `table_from_object` and a table square `2 * table_half_side_m` wide at z = 0.
-    pub fn of_mesh(mesh: &TriangleMesh, table_from_object: &Pose3, table_half_side_m: f32) -> Self {
-        let h = table_half_side_m;
-        Self {
-            positions: mesh.vertices().iter().map(|v| v.to_array()).collect(),
-            world_from_object: row_major(table_from_object),
-            sides: sides_of(mesh),
-            table_positions: [[-h, -h, 0.0], [h, -h, 0.0], [h, h, 0.0], [-h, h, 0.0]],
-        }
-    }
-
-    /// The meshes to upload: the placed object with `colors` (per its mode), and the table if
-    /// asked.
+    /// The meshes to upload from `data` (this object's [`Self::scene_data`]): the object with
+    /// `colors` (per its mode), and the table if asked.
     pub fn inputs<'a>(
         &'a self,
-        object: &'a PlacedObject,
+        data: &'a SceneData,
         colors: &'a [[u8; 3]],
         table: bool,
     ) -> Vec<MeshInput<'a>> {
-        let colors = match object.color_mode {
+        let colors = match self.color_mode {
             ColorMode::PerVertex => Colors::PerVertex(colors),
             ColorMode::PerFace => Colors::PerFace(colors),
         };
-        self.mesh_inputs(object.mesh.triangles(), colors, table)
-    }
-
-    /// The meshes to upload: the object (`triangles` of the mesh this was made from) with
-    /// `colors`, and the table if asked.
-    pub fn mesh_inputs<'a>(
-        &'a self,
-        triangles: &'a [[u32; 3]],
-        colors: Colors<'a>,
-        table: bool,
-    ) -> Vec<MeshInput<'a>> {
-        let mut inputs = vec![MeshInput {
-            positions: &self.positions,
-            indices: triangles,
-            sides: self.sides,
-            colors,
-            world_from_mesh: self.world_from_object,
-            instance_id: OBJECT_ID,
-            material: Material::MATTE,
-        }];
-        if table {
-            inputs.push(MeshInput {
-                positions: &self.table_positions,
-                indices: &TABLE_TRIANGLES,
-                sides: Sides::Both,
-                colors: Colors::Uniform(TABLE_RGB),
-                world_from_mesh: IDENTITY,
-                instance_id: TABLE_ID,
-                material: Material::MATTE,
-            });
-        }
-        inputs
+        data.mesh_inputs(self.mesh.triangles(), colors, table)
     }
 }

@@ -31,8 +31,6 @@ pub(crate) mod object;
 pub mod preview;
 pub mod shard;
 
-pub use object::render_depths;
-
 pub use config::{
     CameraDistribution, CropParams, GraspDatasetConfig, MultiViewCameras, NoiseParams,
     TopDownCameras,

@@ -8,23 +8,21 @@ use mvgrasp_grasp::{
     AntipodalAxis, Grasp, GraspLabel, GraspObject, Gripper, canonical_frame, check_collision,
     sample_antipodal_axes,
 };
-use mvgrasp_render::{Colors, Renderer};
+use mvgrasp_render::Renderer;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-use mvgrasp_planner::{DepthImage, crop_depth, theta_rad};
+use mvgrasp_planner::{crop_depth, theta_rad};
 
 use super::cameras::sample_camera;
 use super::config::GraspDatasetConfig;
 use super::noise::add_depth_noise;
 use super::shard::Datapoint;
-use crate::convert::{render_view, row_major};
-use crate::dataset::{SceneData, splitmix};
+use crate::convert::row_major;
+use crate::dataset::splitmix;
 use crate::error::Result;
-
-/// Half the rendered table's side, metres: wide enough to fill low side views.
-const TABLE_HALF_SIDE_M: f32 = 1.5;
+use crate::scene::render_depths;
 
 /// What the generator resolved from the config once.
 pub(crate) struct Resolved {
@@ -210,29 +208,6 @@ fn aligned_frame(
     let z0 = canonical.transform_vector(Vec3::Z);
     let y0 = canonical.transform_vector(Vec3::Y);
     Some(canonical_frame(axis.center, x, z.dot(y0).atan2(z.dot(z0))))
-}
-
-/// Depth images of `mesh` at `table_from_object` on a table (3 m square, its top at z = 0),
-/// one per camera.
-///
-/// # Errors
-/// A renderer error.
-pub fn render_depths(
-    renderer: &Renderer,
-    mesh: &TriangleMesh,
-    table_from_object: &Pose3,
-    cameras: &[mvgrasp_geometry::Camera],
-) -> Result<Vec<DepthImage>> {
-    let data = SceneData::of_mesh(mesh, table_from_object, TABLE_HALF_SIDE_M);
-    let inputs = data.mesh_inputs(mesh.triangles(), Colors::Uniform([200, 200, 200]), true);
-    let scene = renderer.upload(&inputs)?;
-    let views: Vec<_> = cameras.iter().map(render_view).collect();
-    let frames = renderer.render(&scene, &views)?;
-    Ok(cameras
-        .iter()
-        .zip(frames)
-        .map(|(camera, frame)| DepthImage::new(camera.intrinsics, frame.depth_m))
-        .collect::<mvgrasp_planner::Result<_>>()?)
 }
 
 /// Runs a rapier trial for the chosen share of the collision-free datapoints (in parallel,

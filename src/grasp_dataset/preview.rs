@@ -13,8 +13,8 @@ use safetensors::SafeTensors;
 
 use super::shard::shard_file;
 use super::{Manifest, read_manifest};
-use crate::dataset::write_png8;
 use crate::error::{Error, Result};
+use crate::images::write_png8;
 
 const SCALE: usize = 3;
 const BORDER: usize = 2;

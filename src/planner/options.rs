@@ -106,7 +106,7 @@ pub struct PlanOptions {
     /// multi-view planner's).
     pub depth_from: Option<DepthFrom>,
     /// With `depth_from`: the views rendered with the photographic look
-    /// ([`crate::dataset::photoreal`]) instead of the flat one.
+    /// ([`crate::scene::photoreal`]) instead of the flat one.
     pub photo: bool,
 }
 

@@ -8,16 +8,16 @@ use mvgrasp_geometry::{
 };
 use mvgrasp_grasp::physics::{PhysicsObject, PhysicsOutcome};
 use mvgrasp_grasp::{GraspLabel, GraspObject, Gripper, LabelSettings, PaperGrasp, label_grasps};
-use mvgrasp_render::{Colors, Renderer, random_colors};
+use mvgrasp_render::{Colors, Lighting, Renderer, random_colors};
 use serde::Serialize;
 
-use crate::convert::{render_view, rgb_view_of};
-use crate::dataset::photoreal::render_photoreal;
-use crate::dataset::{OBJECT_ID, SceneData, TABLE_HALF_SIDE_M, splitmix};
+use crate::convert::rgb_view_of;
 use crate::error::Result;
-use crate::grasp_dataset::object::render_depths;
 use crate::planner::rgb::{DepthPredictor, predict_views};
+use crate::scene::photoreal::render_photoreal;
+use crate::scene::{OBJECT_ID, SceneData, TABLE_HALF_SIDE_M, render_depths, render_frames};
 use crate::stereo::RgbView;
+use mvgrasp_planner::seed::splitmix;
 use mvgrasp_planner::{Fusion, FusionParams, GqcnnPolicy, Rejections, ScoredGrasp, View};
 
 /// The best candidates a report lists (and the hand check makes sure of).
@@ -90,7 +90,7 @@ pub struct RgbInput {
     /// Random colours per triangle (as half the RGB-D datasets' objects) instead of per vertex
     /// (interpolated across the faces).
     pub per_face: bool,
-    /// The photographic look ([`crate::dataset::photoreal`]: textures, gloss, room lights and
+    /// The photographic look ([`crate::scene::photoreal`]: textures, gloss, room lights and
     /// shadows, a background, sensor noise, blur, JPEG) instead of random colours under each
     /// camera's headlight (`per_face` is then ignored).
     pub photo: bool,
@@ -278,9 +278,8 @@ pub fn render_rgb(
     } else {
         Colors::PerVertex(&colors)
     };
-    let scene = renderer.upload(&data.mesh_inputs(mesh.triangles(), colors, true))?;
-    let views: Vec<_> = cameras.iter().map(render_view).collect();
-    let frames = renderer.render(&scene, &views)?;
+    let inputs = data.mesh_inputs(mesh.triangles(), colors, true);
+    let frames = render_frames(renderer, &inputs, cameras, &Lighting::Headlight)?;
     Ok(cameras
         .iter()
         .zip(frames)

@@ -3,7 +3,7 @@
 # (examples/sweep_refiner_data.rs: built-in objects of library seed 2 under random camera rigs,
 # the plane sweep run on each), then its training run (training/configs/sweep_refiner_small.toml),
 # exported. Both steps resume where an interrupted run stopped. PHOTO_SHARE=0.75 renders that
-# share of the samples with the photographic look (mvgrasp::dataset::photoreal: textures, gloss,
+# share of the samples with the photographic look (mvgrasp::scene::photoreal: textures, gloss,
 # room lights and shadows, backgrounds, sensor noise, blur, JPEG) into their own folder
 # (../datasets/sweep_refiner_photo) and run (../runs/sweep_refiner_small_photo); the shipped weights
 # are the default's (PHOTO_SHARE=0).

@@ -14,8 +14,10 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
-use super::scene::{OBJECT_ID, SceneData, TABLE_HALF_SIDE_M, TABLE_ID, splitmix};
-use crate::convert::{render_view, rgb_view_of};
+use mvgrasp_planner::seed::splitmix;
+
+use super::{OBJECT_ID, SceneData, TABLE_HALF_SIDE_M, TABLE_ID, render_frames};
+use crate::convert::rgb_view_of;
 use crate::error::{Error, Result};
 use crate::stereo::RgbView;
 
@@ -341,9 +343,7 @@ pub fn render_photoreal(
             input.colors = Colors::Uniform(look.table_rgb);
         }
     }
-    let scene = renderer.upload(&inputs)?;
-    let views: Vec<_> = cameras.iter().map(render_view).collect();
-    let frames = renderer.render_lit(&scene, &views, &look.lighting)?;
+    let frames = render_frames(renderer, &inputs, cameras, &look.lighting)?;
     let mut out = Vec::with_capacity(frames.len());
     for (camera, frame) in cameras.iter().zip(frames) {
         let (mut view, depth_m) = rgb_view_of(camera, frame, OBJECT_ID);
