@@ -27,8 +27,8 @@ use mvgrasp::geometry::{Camera, Intrinsics, IntrinsicsPreset, Pose3};
 use mvgrasp::grasp::Gripper;
 use mvgrasp::grasps_file::GraspsFile;
 use mvgrasp::planner::{
-    DepthImage, GqcnnPolicy, PlanOptions, SensorFiles, SensorPlanParams, View, models,
-    plan_on_view, read_view,
+    DepthImage, PlanOptions, Planner, SensorFiles, SensorPlanParams, View, models, plan_on_view,
+    read_view,
 };
 
 #[derive(Parser, Debug)]
@@ -52,16 +52,16 @@ fn main() -> ExitCode {
     mvgrasp::cli::exit(run(&Args::parse()))
 }
 
-/// The long-lived planner: the policy, gripper and settings made once, and the image.
-struct Planner {
-    policy: GqcnnPolicy,
+/// The long-lived planner: the planner, gripper and settings made once, and the image.
+struct LongLived {
+    planner: Planner,
     gripper: Gripper,
     params: SensorPlanParams,
     intrinsics: Intrinsics,
     depth_m: Vec<f32>,
 }
 
-impl Planner {
+impl LongLived {
     /// One plan as `plan_depth` runs it (the image copied in, as from NumPy); the
     /// `grasps.json` text.
     fn plan(&self) -> Result<String, String> {
@@ -72,7 +72,7 @@ impl Planner {
         let depth = DepthImage::new(self.intrinsics, self.depth_m.clone()).map_err(e2s)?;
         let view = View::new(0, camera, depth).map_err(e2s)?;
         let report =
-            plan_on_view(&self.policy, &self.gripper, view, false, &self.params).map_err(e2s)?;
+            plan_on_view(&self.planner, &self.gripper, view, false, &self.params).map_err(e2s)?;
         GraspsFile::of_sensor(&report).to_json().map_err(e2s)
     }
 }
@@ -140,9 +140,9 @@ fn run(args: &Args) -> Result<(), String> {
     let (source, intrinsics, depth_m) = depth_image(&args.data)?;
     let options = PlanOptions::default();
     let net = models::GQCNN_TOPDOWN.load().map_err(e2s)?;
-    let (policy, gripper, params) = options.on_depth(net).map_err(e2s)?;
-    let planner = Planner {
-        policy,
+    let (planner, gripper, params) = options.on_depth(net).map_err(e2s)?;
+    let planner = LongLived {
+        planner,
         gripper,
         params,
         intrinsics,

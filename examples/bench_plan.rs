@@ -24,8 +24,8 @@ use std::time::Instant;
 use clap::Parser;
 use mvgrasp::grasp::GraspObject;
 use mvgrasp::planner::{
-    CemParams, Fusion, FusionParams, GqcnnPolicy, PlanParams, SensorFiles, View, VirtualScorer,
-    models, read_view, render_scene, sample_image_grasps,
+    CemParams, Fusion, FusionParams, GqcnnPolicy, MultiViewPlanner, PlanParams, SensorFiles, View,
+    VirtualScorer, models, read_view, render_scene, sample_image_grasps,
 };
 use mvgrasp::render::{Backend, Renderer};
 use mvgrasp_planner::{TableFitParams, fit_table, objects_above};
@@ -208,30 +208,35 @@ fn bench_fused(args: &Args) -> Result<(), String> {
     let scene = render_scene(&renderer, &object, &params).map_err(|e| e.to_string())?;
     let gripper = params.labels.gripper.clone();
     let net = models::MVGQCNN.load().map_err(|e| e.to_string())?;
-    let mut policy = GqcnnPolicy::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
+    let policy = GqcnnPolicy::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
     let scorer = VirtualScorer::shipped(gripper.max_opening_m).map_err(|e| e.to_string())?;
     let keep = scorer.params.candidates_per_view;
-    policy.fuse_with(scorer);
+    let planner = MultiViewPlanner::new(policy, scorer);
     let fusion_params = FusionParams::default();
     let once = || -> Result<[f64; 4], String> {
         let t = Instant::now();
         let fusion = Fusion::build(&scene.views, &fusion_params).ok_or("nothing to fuse")?;
         let fuse = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let mut plan = policy.plan(&scene.views, 0).map_err(|e| e.to_string())?;
-        if let Some(scorer) = &policy.virtual_scorer {
-            plan.merge(scorer.propose(&scene.views, 0).map_err(|e| e.to_string())?);
-        }
+        let mut plan = planner
+            .proposer
+            .plan(&scene.views, 0)
+            .map_err(|e| e.to_string())?;
+        plan.merge(
+            planner
+                .scorer
+                .propose(&scene.views, 0)
+                .map_err(|e| e.to_string())?,
+        );
         let planned = t.elapsed().as_secs_f64();
         let t = Instant::now();
         plan.reject_colliding_each_view(&scene.views, Some(&fusion), &gripper, keep);
         let check = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        if let Some(scorer) = &policy.virtual_scorer {
-            scorer
-                .rescore(&mut plan, &fusion, 0)
-                .map_err(|e| e.to_string())?;
-        }
+        planner
+            .scorer
+            .rescore(&mut plan, &fusion, 0)
+            .map_err(|e| e.to_string())?;
         Ok([fuse, planned, check, t.elapsed().as_secs_f64()])
     };
     once()?; // warm-up

@@ -40,8 +40,8 @@ use mvgrasp::grasp::GraspObject;
 use mvgrasp::grasp::physics::FailureStage;
 use mvgrasp::infer::Gqcnn;
 use mvgrasp::planner::{
-    CemParams, DepthFrom, DepthPredictor, FusionParams, GqcnnPolicy, PlanParams, RgbInput,
-    ShippedModel, VirtualScorer, check_grasps, models, plan_grasp,
+    CemParams, DepthFrom, DepthPredictor, FusionParams, GqcnnPolicy, MultiViewPlanner, PlanParams,
+    Planner, RgbInput, ShippedModel, VirtualScorer, check_grasps, models, plan_grasp,
 };
 use mvgrasp::render::{Backend, Renderer};
 use mvgrasp_planner::{Ranker, tilt_rad};
@@ -419,7 +419,7 @@ fn run(args: &Args) -> Result<(), String> {
         if args.unscaled_crops {
             policy.contract.focal_px = params.intrinsics.fx;
         }
-        if p.fused
+        let planner: Planner = if p.fused
             && let Some(model) = rescorer
         {
             let mut scorer = VirtualScorer::new(load(model)?, gripper.max_opening_m)
@@ -446,9 +446,11 @@ fn run(args: &Args) -> Result<(), String> {
                 }
             };
             scorer.set_second(second).map_err(|e| e.to_string())?;
-            policy.fuse_with(scorer);
-        }
-        prepared.push((params, gripper, policy));
+            MultiViewPlanner::new(policy, scorer).into()
+        } else {
+            policy.into()
+        };
+        prepared.push((params, gripper, planner));
     }
     let mut tallies: Vec<Tally> = policies.iter().map(|_| Tally::default()).collect();
     let mut dump = args

@@ -277,3 +277,98 @@ fn the_module_checker_catches_an_upward_import() {
         ["crate::grasp_dataset", "crate::evaluate"]
     );
 }
+
+/// The modules each module of a crate's `src/` names (`crate::NAME`), in its code before its
+/// tests (comments left out).
+fn module_imports(src: &Path) -> std::collections::BTreeMap<String, BTreeSet<String>> {
+    let mut graph = std::collections::BTreeMap::new();
+    for entry in std::fs::read_dir(src).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "rs") {
+            continue;
+        }
+        let name = path.file_stem().unwrap().to_str().unwrap().to_string();
+        let text = std::fs::read_to_string(&path).unwrap();
+        let code = text.split("#[cfg(test)]").next().unwrap_or("");
+        let mut names = BTreeSet::new();
+        for line in code
+            .lines()
+            .filter(|line| !line.trim_start().starts_with("//"))
+        {
+            for (at, _) in line.match_indices("crate::") {
+                let rest = &line[at + "crate::".len()..];
+                let used: String = rest
+                    .chars()
+                    .take_while(|c| c.is_alphanumeric() || *c == '_')
+                    .collect();
+                if !used.is_empty() && used != name {
+                    names.insert(used);
+                }
+            }
+        }
+        graph.insert(name, names);
+    }
+    graph
+}
+
+/// A circle of modules in `graph`, if there is one (each module then imports the next).
+fn a_circle(graph: &std::collections::BTreeMap<String, BTreeSet<String>>) -> Option<Vec<String>> {
+    fn visit(
+        node: &str,
+        graph: &std::collections::BTreeMap<String, BTreeSet<String>>,
+        path: &mut Vec<String>,
+        done: &mut BTreeSet<String>,
+    ) -> Option<Vec<String>> {
+        if let Some(start) = path.iter().position(|n| n == node) {
+            let mut circle = path[start..].to_vec();
+            circle.push(node.to_string());
+            return Some(circle);
+        }
+        if done.contains(node) {
+            return None;
+        }
+        path.push(node.to_string());
+        for next in graph.get(node).into_iter().flatten() {
+            if graph.contains_key(next)
+                && let Some(circle) = visit(next, graph, path, done)
+            {
+                return Some(circle);
+            }
+        }
+        path.pop();
+        done.insert(node.to_string());
+        None
+    }
+    let mut done = BTreeSet::new();
+    graph
+        .keys()
+        .find_map(|node| visit(node, graph, &mut Vec::new(), &mut done))
+}
+
+#[test]
+fn the_planner_crate_has_no_circle_of_modules() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/planner/src");
+    let graph = module_imports(&src);
+    assert!(graph.len() > 10, "{} modules found", graph.len());
+    assert!(graph["virtual_view"].contains("policy"), "{graph:?}");
+    if let Some(circle) = a_circle(&graph) {
+        panic!("a circle of modules: {}", circle.join(" -> "));
+    }
+}
+
+#[test]
+fn the_circle_finder_finds_a_circle() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("a.rs"), "use crate::b::B;\n").unwrap();
+    std::fs::write(
+        dir.path().join("b.rs"),
+        "// crate::c in a comment\nuse crate::c::C;\n#[cfg(test)]\nmod tests { use crate::a::A; }\n",
+    )
+    .unwrap();
+    std::fs::write(dir.path().join("c.rs"), "pub fn f() { crate::a::g(); }\n").unwrap();
+    let graph = module_imports(dir.path());
+    let circle = a_circle(&graph).unwrap();
+    assert_eq!(circle, ["a", "b", "c", "a"]);
+    std::fs::write(dir.path().join("c.rs"), "pub fn f() {}\n").unwrap();
+    assert_eq!(a_circle(&module_imports(dir.path())), None);
+}

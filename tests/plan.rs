@@ -10,7 +10,9 @@ use std::path::Path;
 use mvgrasp::geometry::objects::{Category, generate};
 use mvgrasp::grasp::{GraspObject, label_grasps};
 use mvgrasp::infer::Gqcnn;
-use mvgrasp::planner::{GqcnnPolicy, PlanParams, PlanReport, ScoredGrasp, models, plan_grasp};
+use mvgrasp::planner::{
+    GqcnnPolicy, PlanParams, PlanReport, Planner, ScoredGrasp, models, plan_grasp,
+};
 
 fn policy(model: models::ShippedModel) -> GqcnnPolicy {
     let gripper = PlanParams::default().labels.gripper;
@@ -86,6 +88,7 @@ fn the_networks_first_choices_are_robust_more_often_than_its_last() {
     };
     let mut policy = policy(models::MVGQCNN);
     policy.sampler.num_grasps = 60; // a few hundred candidates an object: quick in a test
+    let planner = Planner::from(policy);
     let (mut best, mut worst) = (Vec::new(), Vec::new());
     for category in [
         Category::Box,
@@ -95,7 +98,7 @@ fn the_networks_first_choices_are_robust_more_often_than_its_last() {
     ] {
         let mesh = generate(category, 30, 0).unwrap().mesh;
         let object = GraspObject::new(mesh.clone()).unwrap();
-        let report = plan_grasp(&renderer, &mesh, &policy, &params).unwrap();
+        let report = plan_grasp(&renderer, &mesh, &planner, &params).unwrap();
         let n = report.candidates.len();
         assert!(n >= 100, "{category:?}: {n} candidates");
         let top = labels(&object, &report, &report.candidates[..10], &params);
@@ -135,7 +138,7 @@ fn candidates_are_lifted_along_their_views() {
         ..Default::default()
     };
     let mesh = generate(Category::Box, 30, 0).unwrap().mesh;
-    let report = plan_grasp(&renderer, &mesh, &policy(models::MVGQCNN), &params).unwrap();
+    let report = plan_grasp(&renderer, &mesh, &policy(models::MVGQCNN).into(), &params).unwrap();
     let cameras = &report.cameras;
     assert_eq!(report.views.len(), 3);
     assert!((report.views[0].elevation_deg - 90.0).abs() < 1e-3);

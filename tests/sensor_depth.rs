@@ -9,7 +9,7 @@ use std::process::Command;
 use mvgrasp::geometry::objects::{Category, generate as generate_object};
 use mvgrasp::geometry::{Camera, Intrinsics, IntrinsicsPreset, RestingPoses, Vec3};
 use mvgrasp::planner::{
-    DepthImage, GqcnnPolicy, PlanParams, SensorFiles, SensorPlanParams, View, models,
+    DepthImage, GqcnnPolicy, PlanParams, Planner, SensorFiles, SensorPlanParams, View, models,
     plan_on_sensor_depth, plan_on_view, read_view, read_views_dir,
 };
 use mvgrasp::scene::render_depths;
@@ -103,8 +103,9 @@ fn a_grasp_on_each_real_single_object_image_with_and_without_its_mask() {
     let images = root.join("examples/single_object/primesense");
     let intrinsics = root.join("calib/primesense/primesense.intr");
     let gripper = PlanParams::default().labels.gripper;
-    let policy =
-        GqcnnPolicy::new(models::GQCNN_TOPDOWN.load().unwrap(), gripper.max_opening_m).unwrap();
+    let policy = Planner::from(
+        GqcnnPolicy::new(models::GQCNN_TOPDOWN.load().unwrap(), gripper.max_opening_m).unwrap(),
+    );
     let params = SensorPlanParams::default();
     for i in 0..10 {
         let mask = images.join(format!("segmask_{i}.png"));
@@ -145,8 +146,9 @@ fn a_grasp_on_some_object_in_each_real_clutter_image_with_and_without_the_camera
         return;
     };
     let gripper = PlanParams::default().labels.gripper;
-    let policy =
-        GqcnnPolicy::new(models::GQCNN_TOPDOWN.load().unwrap(), gripper.max_opening_m).unwrap();
+    let policy = Planner::from(
+        GqcnnPolicy::new(models::GQCNN_TOPDOWN.load().unwrap(), gripper.max_opening_m).unwrap(),
+    );
     let params = SensorPlanParams::default();
     // (folder, images, intrinsics, camera pose)
     let sets = [
@@ -208,7 +210,9 @@ fn oblique_rendered_views_find_the_table_and_a_grasp_with_the_pose_withheld() {
     let (_, pose) = rest.get(0).unwrap();
     let gripper = PlanParams::default().labels.gripper;
     // The multi-view GQ-CNN: trained on views 10 to 90 degrees above the table.
-    let policy = GqcnnPolicy::new(models::MVGQCNN.load().unwrap(), gripper.max_opening_m).unwrap();
+    let policy = Planner::from(
+        GqcnnPolicy::new(models::MVGQCNN.load().unwrap(), gripper.max_opening_m).unwrap(),
+    );
     for elevation_deg in [20.0f32, 35.0, 50.0, 65.0, 80.0] {
         let e = elevation_deg.to_radians();
         let eye = Vec3::new(0.65 * e.cos() * 0.8, 0.65 * e.cos() * 0.6, 0.65 * e.sin());
@@ -551,8 +555,9 @@ fn a_view_in_memory_plans_as_its_files_do() {
     write_depth_png(&path, k.width, k.height, &depth);
     let intrinsics = write_intrinsics(dir.path(), "camera.json", &k);
     let gripper = PlanParams::default().labels.gripper;
-    let policy =
-        GqcnnPolicy::new(models::GQCNN_TOPDOWN.load().unwrap(), gripper.max_opening_m).unwrap();
+    let policy = Planner::from(
+        GqcnnPolicy::new(models::GQCNN_TOPDOWN.load().unwrap(), gripper.max_opening_m).unwrap(),
+    );
     let params = SensorPlanParams::default();
     let files = SensorFiles {
         depth: path,

@@ -11,7 +11,7 @@ use mvgrasp_render::Renderer;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::planner::{ChanceSource, DepthFrom, GqcnnPolicy, PlanOptions, PlanParams, plan_grasp};
+use crate::planner::{ChanceSource, DepthFrom, PlanOptions, PlanParams, Planner, plan_grasp};
 
 /// A planner as the evaluation names it: `plan`'s options.
 #[derive(Clone, Debug, PartialEq)]
@@ -284,7 +284,7 @@ pub fn poses_to_try(rest: &RestingPoses, all: bool) -> Vec<usize> {
 pub struct ReadyPolicy {
     /// What it is.
     pub policy: EvalPolicy,
-    planner: GqcnnPolicy,
+    planner: Planner,
     params: PlanParams,
 }
 

@@ -11,8 +11,9 @@ pub mod sensor;
 
 pub use mvgrasp_planner::{
     CemParams, DepthImage, DepthSource, Fusion, FusionParams, GqcnnPolicy, HoldProbability,
-    ImageSamplerParams, Mask, Occupancy, Plan, ScoredGrasp, ShippedModel, View, ViewSetting,
-    VirtualScorer, VirtualViewParams, models, sample_image_grasps, theta_rad,
+    ImageSamplerParams, Mask, MultiViewPlanner, Occupancy, Plan, Planner, ScoredGrasp,
+    ShippedModel, View, ViewSetting, VirtualScorer, VirtualViewParams, models, sample_image_grasps,
+    theta_rad,
 };
 pub use options::{ChanceSource, FUSED_VIEWS, PlanOptions};
 pub use pipeline::{

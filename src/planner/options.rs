@@ -8,8 +8,8 @@ use mvgrasp_geometry::{Intrinsics, IntrinsicsPreset};
 use mvgrasp_grasp::Gripper;
 use mvgrasp_infer::Gqcnn;
 use mvgrasp_planner::{
-    CemParams, DepthSource, FusionParams, GqcnnPolicy, HoldProbability, PlannerKind, ScoredGrasp,
-    ViewSetting, VirtualScorer, models,
+    CemParams, DepthSource, FusionParams, GqcnnPolicy, HoldProbability, MultiViewPlanner, Planner,
+    PlannerKind, ScoredGrasp, ViewSetting, VirtualScorer, models,
 };
 
 use crate::error::{Error, Result};
@@ -77,7 +77,7 @@ impl ChanceSource {
 #[derive(Clone, Debug, PartialEq)]
 pub struct PlanOptions {
     /// The multi-view planner: views fused, every candidate's hand checked against all of them,
-    /// the best re-scored on virtual views ([`GqcnnPolicy::fuse_with`]).
+    /// the best re-scored on virtual views ([`MultiViewPlanner`]).
     pub fuse: bool,
     /// Dex-Net 2.0's cross-entropy method in each view.
     pub cem: bool,
@@ -196,39 +196,42 @@ impl PlanOptions {
         }
     }
 
-    /// The policy around `net` for `gripper`.
-    fn policy(&self, net: Gqcnn, gripper: &Gripper) -> Result<GqcnnPolicy> {
+    /// The planner around `net` for `gripper`: the multi-view planner with `net` proposing
+    /// when fusing, else `net`'s policy alone.
+    fn planner(&self, net: Gqcnn, gripper: &Gripper) -> Result<Planner> {
         let mut policy = GqcnnPolicy::new(net, gripper.max_opening_m)?;
         policy.cem = self.cem.then(CemParams::default);
-        if self.fuse {
-            policy.fuse_with(VirtualScorer::shipped(gripper.max_opening_m)?);
-        }
-        Ok(policy)
+        Ok(if self.fuse {
+            let scorer = VirtualScorer::shipped(gripper.max_opening_m)?;
+            MultiViewPlanner::new(policy, scorer).into()
+        } else {
+            policy.into()
+        })
     }
 
-    /// The policy, gripper and settings of a plan on depth images (a sensor's, or views with
+    /// The planner, gripper and settings of a plan on depth images (a sensor's, or views with
     /// their cameras).
     ///
     /// # Errors
     /// A network that does not fit the gripper, or shipped weights that cannot be loaded.
-    pub fn on_depth(&self, net: Gqcnn) -> Result<(GqcnnPolicy, Gripper, SensorPlanParams)> {
+    pub fn on_depth(&self, net: Gqcnn) -> Result<(Planner, Gripper, SensorPlanParams)> {
         let gripper = PlanParams::default().labels.gripper;
-        let policy = self.policy(net, &gripper)?;
+        let planner = self.planner(net, &gripper)?;
         let params = SensorPlanParams {
             hand_check: self.hand_check,
             seed: self.seed,
             fusion: self.fuse.then(FusionParams::default),
             ..Default::default()
         };
-        Ok((policy, gripper, params))
+        Ok((planner, gripper, params))
     }
 
-    /// The policy and settings of a plan on a mesh rendered on the table ([`super::plan_grasp`]).
+    /// The planner and settings of a plan on a mesh rendered on the table ([`super::plan_grasp`]).
     ///
     /// # Errors
     /// [`Error::PlanOption`] for no views, more than the test views, or a distance that is
     /// not a positive length; and [`PlanOptions::on_depth`]'s.
-    pub fn on_mesh(&self, net: Gqcnn) -> Result<(GqcnnPolicy, PlanParams)> {
+    pub fn on_mesh(&self, net: Gqcnn) -> Result<(Planner, PlanParams)> {
         let mut setting = ViewSetting::for_pose_inputs(net.architecture().pose_inputs);
         if self.fuse {
             // The multi-view planner's views, which also give depth from RGB its stereo.
@@ -298,8 +301,8 @@ impl PlanOptions {
         if self.fuse {
             params.fusion = Some(FusionParams::default());
         }
-        let policy = self.policy(net, &params.labels.gripper)?;
-        Ok((policy, params))
+        let planner = self.planner(net, &params.labels.gripper)?;
+        Ok((planner, params))
     }
 }
 

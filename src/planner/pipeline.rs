@@ -18,7 +18,7 @@ use crate::scene::photoreal::render_photoreal;
 use crate::scene::{OBJECT_ID, SceneData, TABLE_HALF_SIDE_M, render_depths, render_frames};
 use crate::stereo::RgbView;
 use mvgrasp_planner::seed::splitmix;
-use mvgrasp_planner::{Fusion, FusionParams, GqcnnPolicy, Rejections, ScoredGrasp, View};
+use mvgrasp_planner::{Fusion, FusionParams, Planner, Rejections, ScoredGrasp, View};
 
 /// The best candidates a report lists (and the hand check makes sure of).
 const TOP_KEPT: usize = 10;
@@ -57,9 +57,9 @@ pub struct PlanParams {
     /// views. `None`: the rendered depth.
     pub depth_from_rgb: Option<RgbInput>,
     /// Fuse the views ([`Fusion`]) before the hand check: the open hand must also stay out of
-    /// space that no view has seen, and above the table; and the policy's virtual scorer, if it
-    /// has one, re-scores the best candidates on views drawn from the fused points. `None`:
-    /// each view on its own.
+    /// space that no view has seen, and above the table; and the multi-view planner
+    /// ([`mvgrasp_planner::MultiViewPlanner`]) re-scores the best candidates on views drawn from
+    /// the fused points. `None`: each view on its own.
     pub fusion: Option<FusionParams>,
 }
 
@@ -339,14 +339,14 @@ pub fn check_grasps(
 }
 
 /// The main job in its three stages: [`render_scene`] (the object at rest and the views' depth),
-/// the policy's plan over the views, and [`check_grasp`] on the best grasp.
+/// the planner's plan over the views, and [`check_grasp`] on the best grasp.
 ///
 /// # Errors
 /// An object with no stable pose, or an error of the renderer, the network or the checks.
 pub fn plan_grasp(
     renderer: &Renderer,
     mesh: &TriangleMesh,
-    policy: &GqcnnPolicy,
+    planner: &Planner,
     params: &PlanParams,
 ) -> Result<PlanReport> {
     let object = GraspObject::new(mesh.clone())?;
@@ -362,7 +362,7 @@ pub fn plan_grasp(
     let started = Instant::now();
     let fusion = params.fusion.as_ref().and_then(|f| Fusion::build(views, f));
     let fuse_s = started.elapsed().as_secs_f64();
-    let plan = policy.plan_checked(
+    let plan = planner.plan_checked(
         views,
         fusion.as_ref(),
         gripper,

@@ -13,7 +13,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use mvgrasp_infer::{Lsm, Mvs, Parallelism};
-use mvgrasp_planner::{DepthImage, GqcnnPolicy, Mask, View, models};
+use mvgrasp_planner::{DepthImage, Mask, Planner, View, models};
 
 use crate::error::{Error, Result};
 use crate::lsm::lsm_depths;
@@ -320,13 +320,13 @@ pub struct RgbPlanReport {
 /// # Errors
 /// See [`read_rgb_dir`] and [`plan_on_rgb_views`].
 pub fn plan_on_rgb_dir(
-    policy: &GqcnnPolicy,
+    planner: &Planner,
     gripper: &mvgrasp_grasp::Gripper,
     dir: &Path,
     params: &SensorPlanParams,
     predictor: &DepthPredictor,
 ) -> Result<RgbPlanReport> {
-    plan_on_rgb_views(policy, gripper, &read_rgb_dir(dir)?, params, predictor)
+    plan_on_rgb_views(planner, gripper, &read_rgb_dir(dir)?, params, predictor)
 }
 
 /// Plans on RGB views: their depth predicted ([`predict_views`]), then [`plan_on_views`].
@@ -334,7 +334,7 @@ pub fn plan_on_rgb_dir(
 /// # Errors
 /// See [`DepthPredictor::depths`] and [`plan_on_views`].
 pub fn plan_on_rgb_views(
-    policy: &GqcnnPolicy,
+    planner: &Planner,
     gripper: &mvgrasp_grasp::Gripper,
     rgb: &[RgbView],
     params: &SensorPlanParams,
@@ -353,7 +353,7 @@ pub fn plan_on_rgb_views(
     let views = predict_views(rgb, predictor)?;
     let depth_s = started.elapsed().as_secs_f64();
     Ok(RgbPlanReport {
-        plan: plan_on_views(policy, gripper, views, params)?,
+        plan: plan_on_views(planner, gripper, views, params)?,
         depth_s,
     })
 }

@@ -1,14 +1,14 @@
 //! Planning on a sensor's depth image: the depth, the camera's intrinsics and, when known, its
 //! pose and the object's mask, read from files; the table fitted in the image (always: it
 //! finds the object when there is no mask, and gives the world frame when there is no pose);
-//! the policy's plan over the view with the hand check. No mesh: nothing is simulated.
+//! the planner's plan over the view with the hand check. No mesh: nothing is simulated.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use mvgrasp_geometry::{Camera, Intrinsics, one_line, read_camera_pose};
 use mvgrasp_planner::{
-    DepthImage, Fusion, FusionParams, GqcnnPolicy, Mask, Plan, Rejections, ScoredGrasp, TableFit,
+    DepthImage, Fusion, FusionParams, Mask, Plan, Planner, Rejections, ScoredGrasp, TableFit,
     TableFitParams, View, fit_table, objects_above,
 };
 
@@ -38,7 +38,7 @@ pub struct SensorFiles {
     pub mask: Option<PathBuf>,
 }
 
-/// What [`plan_on_sensor_depth`] does besides the policy's own settings.
+/// What [`plan_on_sensor_depth`] does besides the planner's own settings.
 #[derive(Clone, Debug)]
 pub struct SensorPlanParams {
     /// The table fit and the object found on it.
@@ -108,7 +108,7 @@ pub struct SensorPlanReport {
 /// A file that cannot be read or does not fit the others (each error names its file), no
 /// table in the image, nothing on it (without a mask), or a network error.
 pub fn plan_on_sensor_depth(
-    policy: &GqcnnPolicy,
+    planner: &Planner,
     gripper: &mvgrasp_grasp::Gripper,
     files: &SensorFiles,
     params: &SensorPlanParams,
@@ -116,7 +116,7 @@ pub fn plan_on_sensor_depth(
     let started = Instant::now();
     let view = read_view(files)?;
     let read_s = started.elapsed().as_secs_f64();
-    let mut report = plan_on_view(policy, gripper, view, files.camera_pose.is_some(), params)?;
+    let mut report = plan_on_view(planner, gripper, view, files.camera_pose.is_some(), params)?;
     report.timings[0] = read_s;
     Ok(report)
 }
@@ -129,7 +129,7 @@ pub fn plan_on_sensor_depth(
 /// # Errors
 /// No table in the image, nothing on it (without a mask), or a network error.
 pub fn plan_on_view(
-    policy: &GqcnnPolicy,
+    planner: &Planner,
     gripper: &mvgrasp_grasp::Gripper,
     view: View,
     pose_given: bool,
@@ -140,7 +140,7 @@ pub fn plan_on_view(
     let table_s = started.elapsed().as_secs_f64();
     let started = Instant::now();
     let views = [located.view];
-    let plan = plan_views(policy, gripper, &views, &[located.table], params)?;
+    let plan = plan_views(planner, gripper, &views, &[located.table], params)?;
     let plan_s = started.elapsed().as_secs_f64();
     let [view] = views;
     Ok(SensorPlanReport {
@@ -186,9 +186,9 @@ fn locate(view: View, pose_given: bool, params: &SensorPlanParams) -> Result<Loc
     })
 }
 
-/// The policy's plan over `views`, hand-checked against all of them unless told not to.
+/// The planner's plan over `views`, hand-checked against all of them unless told not to.
 fn plan_views(
-    policy: &GqcnnPolicy,
+    planner: &Planner,
     gripper: &mvgrasp_grasp::Gripper,
     views: &[View],
     tables: &[TableFit],
@@ -207,7 +207,7 @@ fn plan_views(
         }
         None => None,
     };
-    Ok(policy.plan_checked(
+    Ok(planner.plan_checked(
         views,
         fusion.as_ref(),
         gripper,
@@ -427,12 +427,12 @@ pub fn read_views_dir(dir: &Path) -> Result<Vec<View>> {
 /// See [`read_views_dir`]; no table in a view, nothing on it (without a mask), or a network
 /// error.
 pub fn plan_on_views_dir(
-    policy: &GqcnnPolicy,
+    planner: &Planner,
     gripper: &mvgrasp_grasp::Gripper,
     dir: &Path,
     params: &SensorPlanParams,
 ) -> Result<ViewsPlanReport> {
-    plan_on_views(policy, gripper, read_views_dir(dir)?, params)
+    plan_on_views(planner, gripper, read_views_dir(dir)?, params)
 }
 
 /// [`plan_on_views_dir`] on views in memory, each with its camera's pose (and its mask, if it
@@ -442,7 +442,7 @@ pub fn plan_on_views_dir(
 /// No table in a view, nothing on it (without a mask), the world's z not up from the table
 /// (with the views fused), or a network error.
 pub fn plan_on_views(
-    policy: &GqcnnPolicy,
+    planner: &Planner,
     gripper: &mvgrasp_grasp::Gripper,
     read: Vec<View>,
     params: &SensorPlanParams,
@@ -459,7 +459,7 @@ pub fn plan_on_views(
         tables.push(located.table);
         views.push(located.view);
     }
-    let plan = plan_views(policy, gripper, &views, &tables, params)?;
+    let plan = plan_views(planner, gripper, &views, &tables, params)?;
     Ok(ViewsPlanReport {
         views,
         tables,

@@ -340,8 +340,8 @@ fn approaches(axis: Vec3, params: &CloudSamplerParams) -> Vec<Vec3> {
 mod tests {
     use super::*;
     use crate::fusion::FusionParams;
+    use crate::scored::tilt_rad;
     use crate::test_scenes::{box_view, seen_box};
-    use crate::virtual_view::tilt_rad;
 
     #[test]
     fn eigenvectors_of_a_symmetric_matrix() {

@@ -7,11 +7,10 @@
 
 use mvgrasp_geometry::{Mat3, Pose3, Vec3};
 use mvgrasp_grasp::{Gripper, HandShapes};
-use serde::Serialize;
 
 use crate::depth_image::{MASK_MARGIN_PX, View};
 use crate::fusion::Fusion;
-use crate::policy::ScoredGrasp;
+use crate::scored::{Rejection, ScoredGrasp};
 
 /// The hand's boxes are grown by this before observed points are tested against them, metres:
 /// a candidate whose open hand comes within it of an observed point is rejected. The depth image
@@ -19,90 +18,6 @@ use crate::policy::ScoredGrasp;
 /// can reach that far into a box between the points that are tested; and the physics trial
 /// counts an approach that comes within 0.1 mm of the object as touching it.
 const HAND_CLEARANCE_M: f32 = 0.001;
-
-/// Why a candidate was rejected.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Rejection {
-    /// The open hand, on its approach or at the grasp, meets an observed point.
-    HandMeetsObservedDepth,
-    /// The open hand, on its approach or at the grasp, enters space that no view has seen
-    /// (behind every view's surface: the object's hidden side, the table in its shadow).
-    HandEntersUnknownSpace,
-    /// The open hand reaches below the table.
-    HandBelowTable,
-    /// A contact's pixel has no depth in the view the grasp was planned in.
-    ContactOffSurface,
-    /// A contact's pixel is not on the object's mask (within 2 pixels) in the view the grasp
-    /// was planned in.
-    ContactOffObject,
-}
-
-/// How many candidates were rejected, by reason.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
-pub struct Rejections {
-    /// See [`Rejection::HandMeetsObservedDepth`].
-    pub hand_meets_observed_depth: usize,
-    /// See [`Rejection::HandEntersUnknownSpace`].
-    pub hand_enters_unknown_space: usize,
-    /// See [`Rejection::HandBelowTable`].
-    pub hand_below_table: usize,
-    /// See [`Rejection::ContactOffSurface`].
-    pub contact_off_surface: usize,
-    /// See [`Rejection::ContactOffObject`].
-    pub contact_off_object: usize,
-}
-
-impl Rejections {
-    /// Counts one rejection.
-    pub fn add(&mut self, rejection: Rejection) {
-        match rejection {
-            Rejection::HandMeetsObservedDepth => self.hand_meets_observed_depth += 1,
-            Rejection::HandEntersUnknownSpace => self.hand_enters_unknown_space += 1,
-            Rejection::HandBelowTable => self.hand_below_table += 1,
-            Rejection::ContactOffSurface => self.contact_off_surface += 1,
-            Rejection::ContactOffObject => self.contact_off_object += 1,
-        }
-    }
-
-    /// The reasons, in words with their counts ("none" when there is none).
-    pub fn describe(&self) -> String {
-        let reasons: Vec<String> = [
-            (
-                "the open hand meets observed depth",
-                self.hand_meets_observed_depth,
-            ),
-            (
-                "it enters space no view has seen",
-                self.hand_enters_unknown_space,
-            ),
-            ("it reaches below the table", self.hand_below_table),
-            (
-                "contacts off the observed surface",
-                self.contact_off_surface,
-            ),
-            ("contacts off the object", self.contact_off_object),
-        ]
-        .into_iter()
-        .filter(|&(_, n)| n > 0)
-        .map(|(why, n)| format!("{why} ({n})"))
-        .collect();
-        if reasons.is_empty() {
-            "none".into()
-        } else {
-            reasons.join(", ")
-        }
-    }
-
-    /// All of them.
-    pub fn total(&self) -> usize {
-        self.hand_meets_observed_depth
-            + self.hand_enters_unknown_space
-            + self.hand_below_table
-            + self.contact_off_surface
-            + self.contact_off_object
-    }
-}
 
 /// Checks `candidate` against every view and, where given, the views fused: `None` when it
 /// survives, else why not. The hand is `gripper`'s boxes, open for the candidate's width

@@ -2,10 +2,9 @@
 //! network, lifted to the world, best first (the seed paper's multi-view policy; with one
 //! top-down view, Dex-Net 2.0's).
 
-use mvgrasp_grasp::{Grasp, Gripper, ImageGrasp};
+use mvgrasp_grasp::{Gripper, ImageGrasp};
 use mvgrasp_infer::{Gqcnn, GqcnnWorkspace, Tensor};
 use rayon::prelude::*;
-use serde::Serialize;
 
 use crate::cem::{self, CemParams, Mixture};
 use crate::contract::InputContract;
@@ -13,156 +12,13 @@ use crate::crop::crop_depth;
 use crate::depth_image::View;
 use crate::error::{PlannerError, Result};
 use crate::fusion::Fusion;
-use crate::hand_check::{Rejections, check_hand};
+use crate::plan::Plan;
 use crate::sampler::{ImageSamplerParams, sample_image_grasps};
+use crate::scored::{Rejections, ScoredGrasp};
 use crate::seed::splitmix;
-use crate::virtual_view::VirtualScorer;
 
 /// Salts the cross-entropy method's seed apart from the sampler's.
 const CEM_SALT: u64 = 0xce3_5eed;
-
-/// A candidate with the network's score.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct ScoredGrasp {
-    /// The view it was found in.
-    pub view: usize,
-    /// The grasp in that view's image.
-    pub image: ImageGrasp,
-    /// The grasp in the world.
-    pub grasp: Grasp,
-    /// The view's angle to the table plane (the multi-view GQ-CNN's theta), radians.
-    pub theta_rad: f32,
-    /// The network's probability that the grasp is robust: the planning network's on the view,
-    /// or, where the candidate was re-scored ([`crate::VirtualScorer`]), the re-scoring
-    /// network's on its virtual view. Candidates are ranked by it.
-    pub quality: f32,
-    /// The planning network's score on the view, where `quality` is a re-score.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub view_quality: Option<f32>,
-    /// The re-scoring network's score on the candidate's virtual view, where `quality` is the
-    /// ranker's probability built on it ([`crate::Ranker`]).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub virtual_quality: Option<f32>,
-    /// Found by the virtual scorer's own network ([`crate::VirtualScorer::propose`]), not the
-    /// policy's.
-    #[serde(skip_serializing_if = "std::ops::Not::not")]
-    pub by_scorer: bool,
-    /// Sampled on the fused model's points ([`crate::cloud_sampler`]), not in a view's image:
-    /// `view` is the view that looks most nearly along its approach and `image` the grasp as
-    /// that view sees it.
-    #[serde(skip_serializing_if = "std::ops::Not::not")]
-    pub from_cloud: bool,
-}
-
-impl ScoredGrasp {
-    /// Which quota of the per-view hand check and re-scoring the candidate counts against:
-    /// its view's, the scorer's own candidates apart from the policy's, and those sampled on
-    /// the fused model all in one.
-    pub fn quota(&self) -> (usize, bool) {
-        if self.from_cloud {
-            (usize::MAX, false)
-        } else {
-            (self.view, self.by_scorer)
-        }
-    }
-}
-
-/// What the planner found in each view and overall.
-#[derive(Clone, Debug, Serialize)]
-pub struct Plan {
-    /// Every scored candidate of every view, best first (ties: lower view, then sampling
-    /// order), less those [`Plan::reject_colliding`] dropped.
-    pub candidates: Vec<ScoredGrasp>,
-    /// Candidates per view, as sampled.
-    pub candidates_per_view: Vec<usize>,
-    /// The candidates dropped by [`Plan::reject_colliding`], by reason.
-    pub rejections: Rejections,
-}
-
-impl Plan {
-    /// Checks the candidates best first against every view and, where given, the views fused
-    /// ([`check_hand`]: the open hand on its approach and at the grasp must meet no observed
-    /// point, nor space no view has seen, the contacts must lie on observed surface), dropping
-    /// those that fail, until `keep` have survived; the rest stay in order, unchecked. The
-    /// rejections are counted in [`Plan::rejections`].
-    pub fn reject_colliding(
-        &mut self,
-        views: &[View],
-        fusion: Option<&Fusion>,
-        gripper: &Gripper,
-        keep: usize,
-    ) {
-        self.reject_until(views, fusion, gripper, keep, false);
-    }
-
-    /// [`Plan::reject_colliding`] until `keep` of each view (and of each view's candidates
-    /// found by a virtual scorer, apart: [`ScoredGrasp::quota`]) have survived.
-    pub fn reject_colliding_each_view(
-        &mut self,
-        views: &[View],
-        fusion: Option<&Fusion>,
-        gripper: &Gripper,
-        keep: usize,
-    ) {
-        self.reject_until(views, fusion, gripper, keep, true);
-    }
-
-    fn reject_until(
-        &mut self,
-        views: &[View],
-        fusion: Option<&Fusion>,
-        gripper: &Gripper,
-        keep: usize,
-        each_view: bool,
-    ) {
-        let mut kept = Vec::with_capacity(self.candidates.len());
-        // Survivors overall, or per quota.
-        let mut survivors = std::collections::HashMap::<(usize, bool), usize>::new();
-        for candidate in std::mem::take(&mut self.candidates) {
-            let slot = if each_view {
-                candidate.quota()
-            } else {
-                (0, false)
-            };
-            let survivors = survivors.entry(slot).or_default();
-            if *survivors >= keep {
-                kept.push(candidate);
-                continue;
-            }
-            match check_hand(&candidate, views, fusion, gripper) {
-                Some(rejection) => self.rejections.add(rejection),
-                None => {
-                    *survivors += 1;
-                    kept.push(candidate);
-                }
-            }
-        }
-        self.candidates = kept;
-    }
-
-    /// Adds `extra` candidates (another network's, say) and ranks all of them again, best
-    /// first (ties: the earlier first).
-    pub fn merge(&mut self, extra: Vec<ScoredGrasp>) {
-        for c in &extra {
-            if let Some(n) = self.candidates_per_view.get_mut(c.view) {
-                *n += 1;
-            }
-        }
-        self.candidates.extend(extra);
-        self.candidates
-            .sort_by(|a, b| b.quality.total_cmp(&a.quality));
-    }
-
-    /// The best grasp, if any view had a candidate.
-    pub fn best(&self) -> Option<&ScoredGrasp> {
-        self.candidates.first()
-    }
-
-    /// The best grasp found in `view`.
-    pub fn best_in_view(&self, view: usize) -> Option<&ScoredGrasp> {
-        self.candidates.iter().find(|c| c.view == view)
-    }
-}
 
 /// A GQ-CNN and how candidates are made for it.
 #[derive(Debug)]
@@ -179,21 +35,9 @@ pub struct GqcnnPolicy {
     /// Refine each view's candidates by Dex-Net 2.0's cross-entropy method; `None`: score the
     /// sampler's candidates only.
     pub cem: Option<CemParams>,
-    /// Re-score the best candidates on virtual views of the fused scene (where the views are
-    /// fused); `None`: rank by this network's score on each view.
-    pub virtual_scorer: Option<Box<VirtualScorer>>,
 }
 
 impl GqcnnPolicy {
-    /// Makes this policy the multi-view planner's proposer: `scorer` re-scores its candidates
-    /// on virtual views of the fused scene, and each view samples only
-    /// `scorer.params.grasps_per_view` grasp axes (the re-score, not this network's own, picks
-    /// the grasp; fewer proposals cost less and held as often on the development set).
-    pub fn fuse_with(&mut self, scorer: VirtualScorer) {
-        self.sampler.num_grasps = scorer.params.grasps_per_view;
-        self.virtual_scorer = Some(Box::new(scorer));
-    }
-
     /// A policy with the default sampler and crops, for a gripper opening `max_width_m`.
     ///
     /// # Errors
@@ -219,7 +63,6 @@ impl GqcnnPolicy {
             max_width_m,
             batch: 256,
             cem: None,
-            virtual_scorer: None,
         })
     }
 
@@ -251,14 +94,12 @@ impl GqcnnPolicy {
         })
     }
 
-    /// The whole plan over `views`: [`GqcnnPolicy::plan`]; with the views fused and a virtual
-    /// scorer, the scorer's own top-down proposals merged in; the hand check (unless
-    /// `hand_check` is false) against the views and the fused model, until `keep` survive (of
-    /// each view when re-scoring, so that every view's best are re-scored); then the
-    /// re-scoring.
+    /// The whole plan over `views`: [`GqcnnPolicy::plan`], then the hand check (unless
+    /// `hand_check` is false) against the views and, where given, the views fused, until `keep`
+    /// survive.
     ///
     /// # Errors
-    /// See [`GqcnnPolicy::plan`]; a network error while re-scoring.
+    /// See [`GqcnnPolicy::plan`].
     pub fn plan_checked(
         &self,
         views: &[View],
@@ -269,26 +110,8 @@ impl GqcnnPolicy {
         seed: u64,
     ) -> Result<Plan> {
         let mut plan = self.plan(views, seed)?;
-        let scorer = self.virtual_scorer.as_deref().zip(fusion);
-        if let Some((scorer, _)) = scorer {
-            plan.merge(scorer.propose(views, seed)?);
-        }
-        if let Some((scorer, fusion)) = scorer {
-            plan.merge(scorer.propose_on_cloud(fusion, views, seed)?);
-        }
         if hand_check {
-            match scorer {
-                Some((s, _)) => plan.reject_colliding_each_view(
-                    views,
-                    fusion,
-                    gripper,
-                    s.params.candidates_per_view.max(keep),
-                ),
-                None => plan.reject_colliding(views, fusion, gripper, keep),
-            }
-        }
-        if let Some((scorer, fusion)) = scorer {
-            scorer.rescore(&mut plan, fusion, seed)?;
+            plan.reject_colliding(views, fusion, gripper, keep);
         }
         Ok(plan)
     }

@@ -13,8 +13,7 @@
 use serde::Deserialize;
 
 use crate::error::{PlannerError, Result, parse_tagged};
-use crate::policy::ScoredGrasp;
-use crate::virtual_view::tilt_rad;
+use crate::scored::{ScoredGrasp, tilt_rad};
 
 /// The ranker file's format tag.
 pub const RANKER_FORMAT: &str = "mvgrasp-ranker/2";

@@ -5,7 +5,7 @@ use mvgrasp_geometry::{Camera, Intrinsics, IntrinsicsPreset, Vec3};
 use mvgrasp_grasp::ImageGrasp;
 
 use crate::depth_image::{DepthImage, View};
-use crate::policy::ScoredGrasp;
+use crate::scored::ScoredGrasp;
 
 /// A box `half_m` (x, y half extents, metres) and 5 cm tall on a table 0.7 m below a camera
 /// with `k` looking straight down, as that camera sees it (exact per-pixel depth). Where

@@ -23,8 +23,10 @@ use crate::crop::CropParams;
 use crate::depth_image::View;
 use crate::error::{PlannerError, Result};
 use crate::fusion::{Fusion, POINT_BUCKET_M};
-use crate::policy::{GqcnnPolicy, Plan, ScoredGrasp};
+use crate::plan::Plan;
+use crate::policy::GqcnnPolicy;
 use crate::ranker::Ranker;
+use crate::scored::ScoredGrasp;
 use crate::seed::splitmix;
 use mvgrasp_geometry::rounding::rounded_index;
 
@@ -47,7 +49,7 @@ pub struct VirtualViewParams {
     /// The best this many candidates of each view (after the hand check) are re-scored.
     pub candidates_per_view: usize,
     /// Grasp axes the proposing policy samples in each view (each at its sampler's depths)
-    /// once it is fused with this scorer ([`crate::GqcnnPolicy::fuse_with`]).
+    /// once it proposes for this scorer ([`crate::MultiViewPlanner::new`]).
     pub grasps_per_view: usize,
     /// Each candidate's score is the mean over itself and this many perturbed copies (0: its
     /// own score): a robust score that a lucky crop cannot win.
@@ -84,11 +86,6 @@ fn grasp_key(grasp: &Grasp) -> u64 {
     ]
     .iter()
     .fold(0u64, |h, v| splitmix(h ^ u64::from(v.to_bits())))
-}
-
-/// The angle between `grasp`'s approach and straight down, radians.
-pub fn tilt_rad(grasp: &Grasp) -> f32 {
-    (-grasp.approach().z).clamp(-1.0, 1.0).acos()
 }
 
 impl Default for VirtualViewParams {

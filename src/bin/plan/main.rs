@@ -28,9 +28,9 @@ use mvgrasp::grasps_file::{GraspsFile, write_contact_sheet, write_overlay};
 use mvgrasp::infer::Gqcnn;
 use mvgrasp::mcap_log::write_plan_log;
 use mvgrasp::planner::{
-    ChanceSource, DepthFrom, DepthPredictor, GqcnnPolicy, ObjectSource, PlanOptions, PlanParams,
-    PlanReport, ScoredGrasp, SensorFiles, SensorPlanParams, View, models, plan_grasp,
-    plan_on_rgb_dir, plan_on_sensor_depth, plan_on_views_dir,
+    ChanceSource, DepthFrom, DepthPredictor, ObjectSource, PlanOptions, PlanParams, PlanReport,
+    Planner, ScoredGrasp, SensorFiles, SensorPlanParams, View, models, plan_grasp, plan_on_rgb_dir,
+    plan_on_sensor_depth, plan_on_views_dir,
 };
 use mvgrasp::render::{Backend, Renderer};
 use mvgrasp::{ObjectReport, ReportParams};
@@ -274,7 +274,7 @@ fn run(args: &Args) -> Result<bool, String> {
     let (model_name, net) = load_model(&model_of(args))?;
     let source = options.chance_source(&model_name, false);
     check_min_probability(args, source, None)?;
-    let (policy, params) = options.on_mesh(net).map_err(|e| e.to_string())?;
+    let (planner, params) = options.on_mesh(net).map_err(|e| e.to_string())?;
     let backend = Backend::parse(&args.backend).ok_or_else(|| {
         format!(
             "--backend: unknown backend {:?} (expected auto, vulkan, gl, metal, dx12)",
@@ -282,7 +282,7 @@ fn run(args: &Args) -> Result<bool, String> {
         )
     })?;
     let renderer = Renderer::new(backend).map_err(|e| e.to_string())?;
-    let plan = plan_grasp(&renderer, &object.mesh, &policy, &params).map_err(|e| e.to_string())?;
+    let plan = plan_grasp(&renderer, &object.mesh, &planner, &params).map_err(|e| e.to_string())?;
     // Depth from RGB: the same run on the rendered depth, beside it.
     let on_truth = match params.depth_from_rgb {
         Some(_) => {
@@ -290,7 +290,7 @@ fn run(args: &Args) -> Result<bool, String> {
                 depth_from_rgb: None,
                 ..params.clone()
             };
-            Some(plan_grasp(&renderer, &object.mesh, &policy, &truth).map_err(|e| e.to_string())?)
+            Some(plan_grasp(&renderer, &object.mesh, &planner, &truth).map_err(|e| e.to_string())?)
         }
         None => None,
     };
@@ -314,7 +314,7 @@ fn run(args: &Args) -> Result<bool, String> {
             "{}",
             summary(
                 &model_name,
-                policy.net(),
+                planner.policy().net(),
                 &plan,
                 params.views.radius_m,
                 (options.fuse, params.plan_views)
@@ -408,27 +408,19 @@ fn options_of(args: &Args) -> PlanOptions {
     }
 }
 
-/// The network, policy, gripper and settings of planning on sensor depth (`--depth`,
+/// The network, planner, gripper and settings of planning on sensor depth (`--depth`,
 /// `--views-dir`).
 fn sensor_setup(
     args: &Args,
-) -> Result<
-    (
-        String,
-        GqcnnPolicy,
-        mvgrasp::grasp::Gripper,
-        SensorPlanParams,
-    ),
-    String,
-> {
+) -> Result<(String, Planner, mvgrasp::grasp::Gripper, SensorPlanParams), String> {
     let (model_name, net) = load_model(&model_of(args))?;
-    let (policy, gripper, params) = options_of(args).on_depth(net).map_err(|e| e.to_string())?;
-    Ok((model_name, policy, gripper, params))
+    let (planner, gripper, params) = options_of(args).on_depth(net).map_err(|e| e.to_string())?;
+    Ok((model_name, planner, gripper, params))
 }
 
 /// `plan --depth`: a grasp on a sensor's depth image; `Ok(false)` when none was found.
 fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<bool, String> {
-    let (model_name, policy, gripper, params) = sensor_setup(args)?;
+    let (model_name, planner, gripper, params) = sensor_setup(args)?;
     let source = options_of(args).chance_source(&model_name, true);
     check_min_probability(args, source, None)?;
     let files = SensorFiles {
@@ -438,7 +430,7 @@ fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<bool, String> {
         mask: args.mask.clone(),
     };
     let report =
-        plan_on_sensor_depth(&policy, &gripper, &files, &params).map_err(|e| e.to_string())?;
+        plan_on_sensor_depth(&planner, &gripper, &files, &params).map_err(|e| e.to_string())?;
     let file = GraspsFile::of_sensor(&report);
     let chance = hold_probability(report.best.as_ref(), source)?;
     let (reaches, verdict) = check_min_probability(args, source, chance)?;
@@ -457,7 +449,7 @@ fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<bool, String> {
 /// `plan --views-dir`: a grasp over a folder of views; `Ok(false)` when none was found.
 fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
     use std::fmt::Write;
-    let (model_name, policy, gripper, params) = sensor_setup(args)?;
+    let (model_name, planner, gripper, params) = sensor_setup(args)?;
     let rgb_from = match args.rgb {
         Some(_) => Some(depth_from_of(args)?.unwrap_or(DepthFrom::DEFAULT)),
         None => None,
@@ -466,7 +458,7 @@ fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
     check_min_probability(args, source, None)?;
     let (report, depth) = if let Some(from) = rgb_from {
         let predictor = DepthPredictor::shipped(from).map_err(|e| e.to_string())?;
-        let rgb = plan_on_rgb_dir(&policy, &gripper, dir, &params, &predictor)
+        let rgb = plan_on_rgb_dir(&planner, &gripper, dir, &params, &predictor)
             .map_err(|e| e.to_string())?;
         let depth = format!(
             "depth: predicted from RGB by {} in {:.2} s\n",
@@ -476,7 +468,7 @@ fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
         (rgb.plan, depth)
     } else {
         let report =
-            plan_on_views_dir(&policy, &gripper, dir, &params).map_err(|e| e.to_string())?;
+            plan_on_views_dir(&planner, &gripper, dir, &params).map_err(|e| e.to_string())?;
         (report, String::new())
     };
     let file = GraspsFile::of_views(&report);
