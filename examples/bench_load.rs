@@ -18,6 +18,7 @@
 //! The image is gqcnn's real Primesense `depth_0.npy` under `DATA/real_depth` when it is there,
 //! else a synthetic 4 x 6 cm box on a table 0.7 m below a Primesense (the Python tests' box).
 
+use mvgrasp::cli::CliResult;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
@@ -64,7 +65,7 @@ struct LongLived {
 impl LongLived {
     /// One plan as `plan_depth` runs it (the image copied in, as from NumPy); the
     /// `grasps.json` text.
-    fn plan(&self) -> Result<String, String> {
+    fn plan(&self) -> CliResult<String> {
         let camera = Camera {
             intrinsics: self.intrinsics,
             world_from_camera: Pose3::IDENTITY,
@@ -73,7 +74,7 @@ impl LongLived {
         let view = View::new(0, camera, depth).map_err(e2s)?;
         let report =
             plan_on_view(&self.planner, &self.gripper, view, false, &self.params).map_err(e2s)?;
-        GraspsFile::of_sensor(&report).to_json().map_err(e2s)
+        Ok(GraspsFile::of_sensor(&report).to_json().map_err(e2s)?)
     }
 }
 
@@ -94,7 +95,7 @@ fn rss_mib() -> f64 {
 }
 
 /// The real Primesense image and its intrinsics, or the synthetic box on a table.
-fn depth_image(data: &Path) -> Result<(String, Intrinsics, Vec<f32>), String> {
+fn depth_image(data: &Path) -> CliResult<(String, Intrinsics, Vec<f32>)> {
     let root = data.join("real_depth/gqcnn/data");
     let files = SensorFiles {
         depth: root.join("examples/single_object/primesense/depth_0.npy"),
@@ -133,7 +134,7 @@ fn quantile(sorted: &[Duration], q: f64) -> f64 {
     sorted[rank - 1].as_secs_f64() * 1000.0
 }
 
-fn run(args: &Args) -> Result<(), String> {
+fn run(args: &Args) -> CliResult<()> {
     if args.plans == 0 || args.thread_plans == 0 || args.threads.contains(&0) {
         return Err("--plans, --thread-plans and --threads: at least 1".into());
     }
@@ -207,13 +208,13 @@ fn run(args: &Args) -> Result<(), String> {
     println!("|---|---|---|---|---|");
     for &threads in &args.threads {
         let started = Instant::now();
-        let per_thread: Vec<Result<(Vec<Duration>, usize), String>> = std::thread::scope(|s| {
+        let per_thread: Vec<CliResult<(Vec<Duration>, usize)>> = std::thread::scope(|s| {
             let handles: Vec<_> = (0..threads)
                 .map(|t| {
                     let (planner, reference) = (&planner, &reference);
                     // Thread t plans t, t + threads, ...: thread_plans in all.
                     let count = (t..args.thread_plans).step_by(threads).count();
-                    s.spawn(move || -> Result<(Vec<Duration>, usize), String> {
+                    s.spawn(move || -> CliResult<(Vec<Duration>, usize)> {
                         let mut latencies = Vec::with_capacity(count);
                         let mut differing = 0;
                         for _ in 0..count {

@@ -17,6 +17,7 @@
 //! are printed as such: Dex-Net 2.0 planned in 0.8 s a view on a GPU, 2.5 s with the
 //! cross-entropy method (Mahler et al. 2017).
 
+use mvgrasp::cli::CliResult;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -69,26 +70,18 @@ fn plan_once(
     policy: &GqcnnPolicy,
     gripper: &mvgrasp::grasp::Gripper,
     files: &[SensorFiles],
-) -> Result<Stages, String> {
+) -> CliResult<Stages> {
     let mut s = Stages::default();
     let t = Instant::now();
-    let read: Vec<View> = files
-        .iter()
-        .map(read_view)
-        .collect::<Result<_, _>>()
-        .map_err(|e| e.to_string())?;
+    let read: Vec<View> = files.iter().map(read_view).collect::<Result<_, _>>()?;
     s.load = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let mut views = Vec::new();
     for view in read {
-        let table =
-            fit_table(&view.depth, None, &TableFitParams::default()).map_err(|e| e.to_string())?;
-        let objects = objects_above(&view.depth, &table, &TableFitParams::default())
-            .map_err(|e| e.to_string())?;
-        let mut view = view.with_mask(objects).map_err(|e| e.to_string())?;
-        view.camera = table
-            .camera(view.camera.intrinsics)
-            .map_err(|e| e.to_string())?;
+        let table = fit_table(&view.depth, None, &TableFitParams::default())?;
+        let objects = objects_above(&view.depth, &table, &TableFitParams::default())?;
+        let mut view = view.with_mask(objects)?;
+        view.camera = table.camera(view.camera.intrinsics)?;
         views.push(view);
     }
     s.table = t.elapsed().as_secs_f64();
@@ -104,12 +97,12 @@ fn plan_once(
         );
         s.sample += t.elapsed().as_secs_f64();
         let t = Instant::now();
-        policy.score(view, &grasps).map_err(|e| e.to_string())?;
+        policy.score(view, &grasps)?;
         s.network += t.elapsed().as_secs_f64();
     }
     // The policy as `plan` runs it (views in parallel; with CEM when set), and the hand check.
     let t = Instant::now();
-    let mut plan = policy.plan(&views, 0).map_err(|e| e.to_string())?;
+    let mut plan = policy.plan(&views, 0)?;
     s.plan = t.elapsed().as_secs_f64();
     s.scored = plan.candidates.len();
     let t = Instant::now();
@@ -118,17 +111,14 @@ fn plan_once(
     Ok(s)
 }
 
-fn run(args: &Args) -> Result<(), String> {
+fn run(args: &Args) -> CliResult<()> {
     if args.fused_only {
         return bench_fused(args);
     }
     let root = args.data.join("real_depth/gqcnn/data");
     let images = root.join("examples/single_object/primesense");
     if !images.is_dir() {
-        return Err(format!(
-            "{}: no such folder (the shared data)",
-            images.display()
-        ));
+        return Err(format!("{}: no such folder (the shared data)", images.display()).into());
     }
     let files: Vec<SensorFiles> = (0..5)
         .map(|i| SensorFiles {
@@ -139,8 +129,8 @@ fn run(args: &Args) -> Result<(), String> {
         })
         .collect();
     let gripper = PlanParams::default().labels.gripper;
-    let net = models::GQCNN_TOPDOWN.load().map_err(|e| e.to_string())?;
-    let mut policy = GqcnnPolicy::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
+    let net = models::GQCNN_TOPDOWN.load()?;
+    let mut policy = GqcnnPolicy::new(net, gripper.max_opening_m)?;
     println!(
         "planner latency on real Primesense depth (640 x 480), {} threads, median of {} runs, ms",
         rayon::current_num_threads(),
@@ -197,46 +187,35 @@ fn run(args: &Args) -> Result<(), String> {
 }
 
 /// The multi-view planner's stages on 5 rendered views of the default object.
-fn bench_fused(args: &Args) -> Result<(), String> {
-    let renderer = Renderer::new(Backend::Auto).map_err(|e| e.to_string())?;
-    let object = mvgrasp::geometry::objects::default_object().map_err(|e| e.to_string())?;
-    let object = GraspObject::new(object.mesh).map_err(|e| e.to_string())?;
+fn bench_fused(args: &Args) -> CliResult<()> {
+    let renderer = Renderer::new(Backend::Auto)?;
+    let object = mvgrasp::geometry::objects::default_object()?;
+    let object = GraspObject::new(object.mesh)?;
     let mut params = PlanParams::default();
     params.views.count = 5;
     params.views.radius_m = 0.65;
     params.fusion = Some(FusionParams::default());
-    let scene = render_scene(&renderer, &object, &params).map_err(|e| e.to_string())?;
+    let scene = render_scene(&renderer, &object, &params)?;
     let gripper = params.labels.gripper.clone();
-    let net = models::MVGQCNN.load().map_err(|e| e.to_string())?;
-    let policy = GqcnnPolicy::new(net, gripper.max_opening_m).map_err(|e| e.to_string())?;
-    let scorer = VirtualScorer::shipped(gripper.max_opening_m).map_err(|e| e.to_string())?;
+    let net = models::MVGQCNN.load()?;
+    let policy = GqcnnPolicy::new(net, gripper.max_opening_m)?;
+    let scorer = VirtualScorer::shipped(gripper.max_opening_m)?;
     let keep = scorer.params.candidates_per_view;
     let planner = MultiViewPlanner::new(policy, scorer);
     let fusion_params = FusionParams::default();
-    let once = || -> Result<[f64; 4], String> {
+    let once = || -> CliResult<[f64; 4]> {
         let t = Instant::now();
         let fusion = Fusion::build(&scene.views, &fusion_params).ok_or("nothing to fuse")?;
         let fuse = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let mut plan = planner
-            .proposer
-            .plan(&scene.views, 0)
-            .map_err(|e| e.to_string())?;
-        plan.merge(
-            planner
-                .scorer
-                .propose(&scene.views, 0)
-                .map_err(|e| e.to_string())?,
-        );
+        let mut plan = planner.proposer.plan(&scene.views, 0)?;
+        plan.merge(planner.scorer.propose(&scene.views, 0)?);
         let planned = t.elapsed().as_secs_f64();
         let t = Instant::now();
         plan.reject_colliding_each_view(&scene.views, Some(&fusion), &gripper, keep);
         let check = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        planner
-            .scorer
-            .rescore(&mut plan, &fusion, 0)
-            .map_err(|e| e.to_string())?;
+        planner.scorer.rescore(&mut plan, &fusion, 0)?;
         Ok([fuse, planned, check, t.elapsed().as_secs_f64()])
     };
     once()?; // warm-up

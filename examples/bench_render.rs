@@ -13,6 +13,7 @@
 //! frame) as JSON, `--depth-out` the first view's depth (z, metres, 0 = background) as a
 //! little-endian float32 `.npy` of shape (height, width).
 
+use mvgrasp::cli::CliResult;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -57,21 +58,19 @@ fn main() -> ExitCode {
     mvgrasp::cli::exit(run(&Args::parse()))
 }
 
-fn run(args: &Args) -> Result<(), String> {
+fn run(args: &Args) -> CliResult<()> {
     if args.repeats == 0 {
         return Err("--repeats must be at least 1".into());
     }
     let backend = Backend::parse(&args.backend)
         .ok_or_else(|| format!("--backend {}: expected gl, vulkan or auto", args.backend))?;
-    let mesh = mvgrasp_geometry::load_mesh(&args.mesh).map_err(|e| e.to_string())?;
+    let mesh = mvgrasp_geometry::load_mesh(&args.mesh)?;
     let target = mesh.aabb().center();
     let layout = HemisphereLayout {
         count: args.views,
         ..HemisphereLayout::paper_training()
     };
-    let cameras = layout
-        .cameras(Intrinsics::phoxi_s(), target, args.seed)
-        .map_err(|e| e.to_string())?;
+    let cameras = layout.cameras(Intrinsics::phoxi_s(), target, args.seed)?;
     let views = cameras
         .iter()
         .map(|camera| checked_view(camera, &mesh, target))
@@ -82,32 +81,28 @@ fn run(args: &Args) -> Result<(), String> {
 
     let positions: Vec<[f32; 3]> = mesh.vertices().iter().map(|v| v.to_array()).collect();
     let colors = mvgrasp_render::random_colors(args.seed, mesh.triangles().len());
-    let renderer = Renderer::new(backend).map_err(|e| e.to_string())?;
+    let renderer = Renderer::new(backend)?;
     let started = Instant::now();
-    let scene = renderer
-        .upload(&[MeshInput {
-            positions: &positions,
-            indices: mesh.triangles(),
-            sides: mvgrasp::convert::sides_of(&mesh),
-            colors: Colors::PerFace(&colors),
-            world_from_mesh: IDENTITY,
-            instance_id: 1,
-            material: Material::MATTE,
-        }])
-        .map_err(|e| e.to_string())?;
+    let scene = renderer.upload(&[MeshInput {
+        positions: &positions,
+        indices: mesh.triangles(),
+        sides: mvgrasp::convert::sides_of(&mesh),
+        colors: Colors::PerFace(&colors),
+        world_from_mesh: IDENTITY,
+        instance_id: 1,
+        material: Material::MATTE,
+    }])?;
     let upload_ms = ms_since(started);
 
     let started = Instant::now();
-    let frames = renderer.render(&scene, &views).map_err(|e| e.to_string())?;
+    let frames = renderer.render(&scene, &views)?;
     let warm_up_ms = ms_since(started);
     let seen: Vec<usize> = frames
         .iter()
         .map(|f| f.mask.iter().filter(|&&m| m == 1).count())
         .collect();
     if let Some((i, _)) = seen.iter().enumerate().find(|&(_, &n)| n == 0) {
-        return Err(format!(
-            "view {i} does not see the mesh: a camera or backend fault"
-        ));
+        return Err(format!("view {i} does not see the mesh: a camera or backend fault").into());
     }
     if let (Some(path), Some(frame)) = (&args.depth_out, frames.first()) {
         common::write_npy_f32(
@@ -120,10 +115,10 @@ fn run(args: &Args) -> Result<(), String> {
     let mut call_ms = Vec::with_capacity(args.repeats);
     for _ in 0..args.repeats {
         let started = Instant::now();
-        let frames = renderer.render(&scene, &views).map_err(|e| e.to_string())?;
+        let frames = renderer.render(&scene, &views)?;
         call_ms.push(ms_since(started));
         if frames.len() != views.len() {
-            return Err(format!("{} frames for {} views", frames.len(), views.len()));
+            return Err(format!("{} frames for {} views", frames.len(), views.len()).into());
         }
     }
     let median_ms = median(&mut call_ms.clone());
@@ -171,7 +166,7 @@ fn run(args: &Args) -> Result<(), String> {
 /// The render view of a camera, checked: the target and the mesh's first vertices project to
 /// the same pixels through the view's row-major `camera_from_world` as through
 /// [`Camera::project`].
-fn checked_view(camera: &Camera, mesh: &TriangleMesh, target: Vec3) -> Result<View, String> {
+fn checked_view(camera: &Camera, mesh: &TriangleMesh, target: Vec3) -> CliResult<View> {
     let view: View = mvgrasp::convert::render_view(camera);
     let m = view.camera_from_world;
     for &p in std::iter::once(&target).chain(mesh.vertices().iter().take(16)) {
@@ -183,13 +178,14 @@ fn checked_view(camera: &Camera, mesh: &TriangleMesh, target: Vec3) -> Result<Vi
         if (got[0] - expected[0]).abs() > 1e-2 || (got[1] - expected[1]).abs() > 1e-2 {
             return Err(format!(
                 "camera conversion is wrong: {p} projects to {got:?}, the camera says {expected:?}"
-            ));
+            )
+            .into());
         }
     }
     Ok(view)
 }
 
-fn write_cameras(path: &Path, mesh: &Path, target: Vec3, cameras: &[Camera]) -> Result<(), String> {
+fn write_cameras(path: &Path, mesh: &Path, target: Vec3, cameras: &[Camera]) -> CliResult<()> {
     let json = serde_json::json!({
         "mesh": mesh.display().to_string(),
         "target": target.to_array(),
@@ -197,8 +193,8 @@ fn write_cameras(path: &Path, mesh: &Path, target: Vec3, cameras: &[Camera]) -> 
         "pixel_centres": "integer image coordinates (u = fx x / z + cx)",
         "cameras": cameras,
     });
-    let text = serde_json::to_string_pretty(&json).map_err(|e| e.to_string())?;
-    std::fs::write(path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
+    let text = serde_json::to_string_pretty(&json)?;
+    Ok(std::fs::write(path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))?)
 }
 
 fn median(values: &mut [f64]) -> f64 {

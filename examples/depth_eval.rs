@@ -27,6 +27,7 @@
 //! (`RAYON_NUM_THREADS`), as the baseline's. `--methods` runs some of them (the hull comes with
 //! the sweep); `--refiner` scores a training run's export instead of the shipped refiner.
 
+use mvgrasp::cli::CliResult;
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -103,8 +104,8 @@ fn main() -> ExitCode {
     mvgrasp::cli::exit(run(&Args::parse()))
 }
 
-fn run(args: &Args) -> Result<(), String> {
-    let renderer = Renderer::new(Backend::Auto).map_err(|e| e.to_string())?;
+fn run(args: &Args) -> CliResult<()> {
+    let renderer = Renderer::new(Backend::Auto)?;
     let intrinsics = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
     let sweep = SweepParams {
         hull_where_unconfirmed: args.sweep_hull,
@@ -123,7 +124,8 @@ fn run(args: &Args) -> Result<(), String> {
         return Err(format!(
             "--methods {unknown}: expected some of {}",
             Method::ALL.join(", ")
-        ));
+        )
+        .into());
     }
     let runs = |method: &str| args.methods.iter().any(|m| m == method);
     // [LSM, sweep, hull, MVS, refined]: the rows printed.
@@ -135,16 +137,14 @@ fn run(args: &Args) -> Result<(), String> {
         runs("refined"),
     ];
     let lsm = models::LSM
-        .load()
-        .map_err(|e| e.to_string())?
+        .load()?
         .with_parallelism(Parallelism::all_threads());
     let mvs = models::MVS
-        .load()
-        .map_err(|e| e.to_string())?
+        .load()?
         .with_parallelism(Parallelism::all_threads());
     let refiner_net = match &args.refiner {
-        Some(json) => SweepRefiner::load(json).map_err(|e| e.to_string())?,
-        None => models::SWEEP_REFINER.load().map_err(|e| e.to_string())?,
+        Some(json) => SweepRefiner::load(json)?,
+        None => models::SWEEP_REFINER.load()?,
     };
     let refiner_name = match &args.refiner {
         Some(json) => json.display().to_string(),
@@ -158,15 +158,14 @@ fn run(args: &Args) -> Result<(), String> {
     };
     let counts = &args.views;
     if let Some(n) = counts.iter().find(|n| !(1..=10).contains(*n)) {
-        return Err(format!(
-            "--views {n}: expected 1 to 10 (there are 10 test views)"
-        ));
+        return Err(format!("--views {n}: expected 1 to 10 (there are 10 test views)").into());
     }
     if !(args.distance_m.is_finite() && args.distance_m > 0.0) {
         return Err(format!(
             "--distance-m {}: expected a distance in metres above 0",
             args.distance_m
-        ));
+        )
+        .into());
     }
     let layout = HemisphereLayout {
         radius_m: args.distance_m,
@@ -182,18 +181,12 @@ fn run(args: &Args) -> Result<(), String> {
     let mut objects = 0;
     for category in Category::ALL {
         for index in 30..30 + args.per_category {
-            let object = generate(category, index, 0).map_err(|e| e.to_string())?;
-            let rest = RestingPoses::of(&object.mesh).map_err(|e| e.to_string())?;
-            let (_, pose) = rest.get(0).map_err(|e| e.to_string())?;
-            let com = object
-                .mesh
-                .mass_facts(1000.0)
-                .map_err(|e| e.to_string())?
-                .center_of_mass;
+            let object = generate(category, index, 0)?;
+            let rest = RestingPoses::of(&object.mesh)?;
+            let (_, pose) = rest.get(0)?;
+            let com = object.mesh.mass_facts(1000.0)?.center_of_mass;
             let target = pose.table_from_object.transform_point(com);
-            let cameras = layout
-                .cameras(intrinsics, target, u64::from(index))
-                .map_err(|e| e.to_string())?;
+            let cameras = layout.cameras(intrinsics, target, u64::from(index))?;
             let rendered = if args.photo {
                 render_photoreal(
                     &renderer,
@@ -212,14 +205,13 @@ fn run(args: &Args) -> Result<(), String> {
                     &input,
                     u64::from(index),
                 )
-            }
-            .map_err(|e| e.to_string())?;
+            }?;
             objects += 1;
             for (c, &n) in counts.iter().enumerate() {
                 let views: Vec<RgbView> = rendered[..n].iter().map(|(v, _)| v.clone()).collect();
                 let started = Instant::now();
                 let learnt = if shown[0] {
-                    lsm_depths(&lsm, &views).map_err(|e| e.to_string())?
+                    lsm_depths(&lsm, &views)?
                 } else {
                     Vec::new()
                 };
@@ -227,7 +219,7 @@ fn run(args: &Args) -> Result<(), String> {
                 // One view: the LSM alone (stereo and carving need two).
                 let started = Instant::now();
                 let depths = if n >= 2 && shown[1] {
-                    sweep_depths(&views, &sweep).map_err(|e| e.to_string())?
+                    sweep_depths(&views, &sweep)?
                 } else {
                     Vec::new()
                 };
@@ -235,14 +227,14 @@ fn run(args: &Args) -> Result<(), String> {
                 seconds[c][2] = seconds[c][1];
                 let started = Instant::now();
                 let stereo = if n >= 2 && shown[3] {
-                    mvs_depths(&mvs, &views, 0.0).map_err(|e| e.to_string())?
+                    mvs_depths(&mvs, &views, 0.0)?
                 } else {
                     Vec::new()
                 };
                 seconds[c][3] += started.elapsed().as_secs_f64();
                 let started = Instant::now();
                 let sharpened = if n >= 2 && shown[4] {
-                    refined.depths(&views).map_err(|e| e.to_string())?
+                    refined.depths(&views)?
                 } else {
                     Vec::new()
                 };

@@ -10,6 +10,7 @@
 mod common;
 
 use common::{EvalArgs, REAL_MESHES, Rested, analyse_at_rest};
+use mvgrasp::cli::CliResult;
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -48,7 +49,7 @@ fn main() -> ExitCode {
     mvgrasp::cli::exit(run(&Args::parse()))
 }
 
-fn run(args: &Args) -> Result<(), String> {
+fn run(args: &Args) -> CliResult<()> {
     let config = AnalysisConfig {
         sampling: mvgrasp::grasp::SamplingParams {
             target_grasps: args.n,
@@ -71,7 +72,7 @@ fn run(args: &Args) -> Result<(), String> {
             continue;
         }
         let started = Instant::now();
-        let mesh = load_mesh(&path).map_err(|e| e.to_string())?;
+        let mesh = load_mesh(&path)?;
         let Some(Rested {
             pose_index,
             analysis,
@@ -121,7 +122,7 @@ fn run(args: &Args) -> Result<(), String> {
     }
     print_row(&total);
     if let Some(path) = &args.eval.json {
-        let json = serde_json::to_string_pretty(&rows).map_err(|e| e.to_string())?;
+        let json = serde_json::to_string_pretty(&rows)?;
         std::fs::write(path, json).map_err(|e| format!("{}: {e}", path.display()))?;
     }
     Ok(())

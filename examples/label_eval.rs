@@ -27,6 +27,7 @@
 mod common;
 
 use common::{EvalArgs, REAL_MESHES, Rested, analyse_at_rest};
+use mvgrasp::cli::CliResult;
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -129,7 +130,7 @@ fn write_replay_meshes(
     name: &str,
     mesh: &TriangleMesh,
     body: &PhysicsObject,
-) -> Result<(String, String), String> {
+) -> CliResult<(String, String)> {
     let stem: String = name
         .chars()
         .map(|c| {
@@ -141,7 +142,7 @@ fn write_replay_meshes(
         })
         .collect();
     let (mesh_name, parts_name) = (format!("{stem}.obj"), format!("{stem}.parts.obj"));
-    mvgrasp::geometry::write_obj(mesh, dir.join(&mesh_name)).map_err(|e| e.to_string())?;
+    mvgrasp::geometry::write_obj(mesh, dir.join(&mesh_name))?;
     let shape = body.shape();
     let parts: Vec<(mvgrasp::geometry::Pose3, &dyn parry3d::shape::Shape)> =
         match shape.as_compound() {
@@ -223,18 +224,18 @@ fn main() -> ExitCode {
     mvgrasp::cli::exit(run(&Args::parse()))
 }
 
-fn run(args: &Args) -> Result<(), String> {
+fn run(args: &Args) -> CliResult<()> {
     let mut objects: Vec<(String, String, TriangleMesh)> = Vec::new();
     for category in Category::ALL {
         for index in 30..30 + args.per_category {
-            let o = generate(category, index, 0).map_err(|e| e.to_string())?;
+            let o = generate(category, index, 0)?;
             objects.push((category.name().to_string(), o.name, o.mesh));
         }
     }
     for m in &REAL_MESHES[2..11] {
         let path = args.eval.data.join(m);
         if path.is_file() {
-            let mesh = load_mesh(&path).map_err(|e| e.to_string())?;
+            let mesh = load_mesh(&path)?;
             let name = m.rsplit('/').next().unwrap_or(m).to_string();
             objects.push(("real".into(), name, mesh));
         }
@@ -279,15 +280,11 @@ fn run(args: &Args) -> Result<(), String> {
         else {
             continue;
         };
-        let body =
-            PhysicsObject::from_grasp_object(&object, &config.shape).map_err(|e| e.to_string())?;
+        let body = PhysicsObject::from_grasp_object(&object, &config.shape)?;
         if let Some(dir) = &args.replay {
             let (mesh_file, parts_file) =
                 write_replay_meshes(&dir.join("meshes"), name, object.mesh(), &body)?;
-            let mass = object
-                .mesh()
-                .mass_facts(params.object_density_kg_m3)
-                .map_err(|e| e.to_string())?;
+            let mass = object.mesh().mass_facts(params.object_density_kg_m3)?;
             replay.objects.push(ReplayObject {
                 name: name.clone(),
                 group: group.clone(),
@@ -315,8 +312,7 @@ fn run(args: &Args) -> Result<(), String> {
                 // Independent of the label's trials (`analyse` seeds those from
                 // grasp_seed(seed, 2)).
                 grasp_seed(grasp_seed(args.eval.seed, 3), i),
-            )
-            .map_err(|e| e.to_string())?;
+            )?;
             if args.replay.is_some() {
                 replay.grasps.push(ReplayGrasp {
                     object: replay.objects.len() - 1,
@@ -388,12 +384,12 @@ fn run(args: &Args) -> Result<(), String> {
         failures.settle, failures.approach, failures.close, failures.lift, failures.shake
     );
     if let Some(path) = &args.eval.json {
-        let text = serde_json::to_string_pretty(&all).map_err(|e| e.to_string())?;
+        let text = serde_json::to_string_pretty(&all)?;
         std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))?;
     }
     if let Some(dir) = &args.replay {
         let path = dir.join("replay.json");
-        let text = serde_json::to_string_pretty(&replay).map_err(|e| e.to_string())?;
+        let text = serde_json::to_string_pretty(&replay)?;
         std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
     }
     Ok(())

@@ -10,6 +10,7 @@
 //!
 //! Deterministic by seed (on one renderer).
 
+use mvgrasp::cli::CliResult;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -49,8 +50,8 @@ fn main() -> ExitCode {
     mvgrasp::cli::exit(run(&Args::parse()))
 }
 
-fn run(args: &Args) -> Result<(), String> {
-    let renderer = Renderer::new(Backend::Auto).map_err(|e| e.to_string())?;
+fn run(args: &Args) -> CliResult<()> {
+    let renderer = Renderer::new(Backend::Auto)?;
     let intrinsics = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
     let columns = args.views + 1;
     let (sheet_w, sheet_h) = (columns * TILE.0, args.rows * TILE.1);
@@ -58,9 +59,9 @@ fn run(args: &Args) -> Result<(), String> {
     for row in 0..args.rows {
         let mut rng = ChaCha8Rng::seed_from_u64(args.seed ^ (row as u64) << 24);
         let category = Category::ALL[row % Category::ALL.len()];
-        let object = generate(category, rng.random_range(0..20), 2).map_err(|e| e.to_string())?;
-        let rest = RestingPoses::of(&object.mesh).map_err(|e| e.to_string())?;
-        let (_, pose) = rest.get(0).map_err(|e| e.to_string())?;
+        let object = generate(category, rng.random_range(0..20), 2)?;
+        let rest = RestingPoses::of(&object.mesh)?;
+        let (_, pose) = rest.get(0)?;
         let target = pose
             .table_from_object
             .transform_point(object.mesh.aabb().center());
@@ -70,9 +71,7 @@ fn run(args: &Args) -> Result<(), String> {
             include_top_down: false,
             ..HemisphereLayout::paper_training()
         };
-        let cameras = layout
-            .cameras(intrinsics, target, rng.random())
-            .map_err(|e| e.to_string())?;
+        let cameras = layout.cameras(intrinsics, target, rng.random())?;
         let seed = rng.random();
         let flat = render_rgb(
             &renderer,
@@ -85,16 +84,14 @@ fn run(args: &Args) -> Result<(), String> {
                 photo: false,
             },
             seed,
-        )
-        .map_err(|e| e.to_string())?;
+        )?;
         let photo = render_photoreal(
             &renderer,
             &object.mesh,
             &pose.table_from_object,
             &cameras,
             seed,
-        )
-        .map_err(|e| e.to_string())?
+        )?
         .views;
         for (column, (view, _)) in flat.iter().chain(&photo).enumerate() {
             let k = &view.camera.intrinsics;
@@ -109,7 +106,7 @@ fn run(args: &Args) -> Result<(), String> {
             }
         }
     }
-    write_png8(&args.out, sheet_w as u32, sheet_h as u32, 3, &sheet).map_err(|e| e.to_string())?;
+    write_png8(&args.out, sheet_w as u32, sheet_h as u32, 3, &sheet)?;
     eprintln!("wrote {} ({sheet_w} x {sheet_h})", args.out.display());
     Ok(())
 }

@@ -28,6 +28,7 @@
 mod common;
 
 use common::{REAL_MESHES, wilson_95};
+use mvgrasp::cli::CliResult;
 use mvgrasp::evaluate::objects::{ObjectSet, objects as real_objects};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -177,7 +178,7 @@ struct Policy {
 
 /// The policies named on the command line (all without names, the top-down one alone with
 /// --top-down-only).
-fn policies(args: &Args) -> Result<Vec<Policy>, String> {
+fn policies(args: &Args) -> CliResult<Vec<Policy>> {
     let names: Vec<&str> = if args.top_down_only {
         vec!["topdown"]
     } else if args.policies.is_empty() {
@@ -305,12 +306,12 @@ fn main() -> ExitCode {
     mvgrasp::cli::exit(run(&Args::parse()))
 }
 
-fn run(args: &Args) -> Result<(), String> {
+fn run(args: &Args) -> CliResult<()> {
     // (name, group, mesh): the group is the category, or "real meshes".
     let mut objects: Vec<(String, &'static str, TriangleMesh)> = Vec::new();
     for category in Category::ALL {
         for index in args.first_index..args.first_index + args.per_category {
-            let o = generate(category, index, 0).map_err(|e| e.to_string())?;
+            let o = generate(category, index, 0)?;
             objects.push((o.name, category.name(), o.mesh));
         }
     }
@@ -318,8 +319,7 @@ fn run(args: &Args) -> Result<(), String> {
     // pybullet mug's URDF (its handle filled by the physics hull) to grasp_eval;
     // --every-real-mesh takes every real mesh (`evaluate --set real`'s).
     let real: Vec<String> = if args.every_real_mesh {
-        real_objects(&ObjectSet::Real, 0, &args.data)
-            .map_err(|e| e.to_string())?
+        real_objects(&ObjectSet::Real, 0, &args.data)?
             .into_iter()
             .map(|o| o.name)
             .collect()
@@ -338,7 +338,7 @@ fn run(args: &Args) -> Result<(), String> {
         }
     }
     let preset: IntrinsicsPreset = args.camera.parse().map_err(|e| format!("--camera: {e}"))?;
-    let renderer = Renderer::new(Backend::Auto).map_err(|e| e.to_string())?;
+    let renderer = Renderer::new(Backend::Auto)?;
     let policies = policies(args)?;
     println!(
         "camera: {} (every view), crops {}",
@@ -354,9 +354,7 @@ fn run(args: &Args) -> Result<(), String> {
         "gqcnn" => Some(models::GQCNN_TOPDOWN),
         "mvgqcnn" => Some(models::MVGQCNN),
         other => {
-            return Err(format!(
-                "--rescore {other}: expected gqcnn, mvgqcnn or none"
-            ));
+            return Err(format!("--rescore {other}: expected gqcnn, mvgqcnn or none").into());
         }
     };
     // Each policy's settings, gripper and network, prepared once for every object.
@@ -371,7 +369,7 @@ fn run(args: &Args) -> Result<(), String> {
         params.labels.physics_shape.shell = args.shell;
         params.depth_from_rgb = match p.rgb {
             Some(from) => {
-                let depth = DepthPredictor::shipped(from).map_err(|e| e.to_string())?;
+                let depth = DepthPredictor::shipped(from)?;
                 Some(RgbInput {
                     // As `plan` does: one network planning in one view gets complete depth.
                     depth: if p.top_down_of_rgb {
@@ -408,13 +406,13 @@ fn run(args: &Args) -> Result<(), String> {
             } else {
                 &args.mvgqcnn
             };
-            match replacement {
-                Some(path) => Gqcnn::load(path).map_err(|e| e.to_string()),
-                None => model.load().map_err(|e| e.to_string()),
-            }
+            let net: CliResult<Gqcnn> = match replacement {
+                Some(path) => Ok(Gqcnn::load(path)?),
+                None => Ok(model.load()?),
+            };
+            net
         };
-        let mut policy =
-            GqcnnPolicy::new(load(p.model)?, gripper.max_opening_m).map_err(|e| e.to_string())?;
+        let mut policy = GqcnnPolicy::new(load(p.model)?, gripper.max_opening_m)?;
         policy.cem = args.cem.then(CemParams::default);
         if args.unscaled_crops {
             policy.contract.focal_px = params.intrinsics.fx;
@@ -422,8 +420,7 @@ fn run(args: &Args) -> Result<(), String> {
         let planner: Planner = if p.fused
             && let Some(model) = rescorer
         {
-            let mut scorer = VirtualScorer::new(load(model)?, gripper.max_opening_m)
-                .map_err(|e| e.to_string())?;
+            let mut scorer = VirtualScorer::new(load(model)?, gripper.max_opening_m)?;
             scorer.params.candidates_per_view = args.rescore_candidates;
             if let Some(n) = args.perturbations {
                 scorer.params.perturbations = n;
@@ -433,19 +430,19 @@ fn run(args: &Args) -> Result<(), String> {
             }
             scorer.params.propose_top_down = !args.no_top_down_proposals;
             if !args.no_ranker {
-                scorer.ranker = Some(Ranker::shipped().map_err(|e| e.to_string())?);
+                scorer.ranker = Some(Ranker::shipped()?);
             }
             let second = match args.second_scorer.as_deref() {
                 None => None,
                 Some("gqcnn") => Some(load(models::GQCNN_TOPDOWN)?),
                 Some("mvgqcnn") => Some(load(models::MVGQCNN)?),
                 Some(other) => {
-                    return Err(format!(
-                        "--second-scorer {other}: expected gqcnn or mvgqcnn"
-                    ));
+                    return Err(
+                        format!("--second-scorer {other}: expected gqcnn or mvgqcnn").into(),
+                    );
                 }
             };
-            scorer.set_second(second).map_err(|e| e.to_string())?;
+            scorer.set_second(second)?;
             MultiViewPlanner::new(policy, scorer).into()
         } else {
             policy.into()
@@ -470,8 +467,7 @@ fn run(args: &Args) -> Result<(), String> {
         // grasp).
         let object = (args.top10 || dump.is_some())
             .then(|| GraspObject::new(mesh.clone()))
-            .transpose()
-            .map_err(|e| e.to_string())?;
+            .transpose()?;
         for ((Policy { label, .. }, (params, gripper, policy)), tally) in
             policies.iter().zip(&prepared).zip(&mut tallies)
         {
@@ -519,8 +515,7 @@ fn run(args: &Args) -> Result<(), String> {
                     &report.top,
                     gripper,
                     params,
-                )
-                .map_err(|e| e.to_string())?;
+                )?;
                 // As for the best grasp: a trial that lost the resting pose is left out.
                 let trials: Vec<bool> = labels
                     .iter()
@@ -667,7 +662,7 @@ fn dump_rescored(
     report: &mvgrasp::planner::PlanReport,
     (gripper, params): (&mvgrasp::grasp::Gripper, &PlanParams),
     renderer: Option<&Renderer>,
-) -> Result<(), String> {
+) -> CliResult<()> {
     let rescored: Vec<_> = report
         .candidates
         .iter()
@@ -689,8 +684,7 @@ fn dump_rescored(
         &rescored,
         gripper,
         params,
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     for (rank, ((c, l), r)) in rescored.iter().zip(&labels).zip(&recon_trials).enumerate() {
         let tilt_deg = tilt_rad(&c.grasp).to_degrees();
         let line = serde_json::json!({
@@ -713,10 +707,10 @@ fn dump_rescored(
             "recon_held": r.map(|p| p.success),
             "recon_failed_at": r.and_then(|p| p.failed_at).map(|f| format!("{f:?}")),
         });
-        writeln!(out, "{line}").map_err(|e| e.to_string())?;
+        writeln!(out, "{line}")?;
     }
     // Flushed here, so that a failed write is an error rather than lost when the writer drops.
-    out.flush().map_err(|e| e.to_string())
+    Ok(out.flush()?)
 }
 
 /// Each of `candidates` tried in physics on `object` as its fused views reconstruct it (`None`
@@ -727,11 +721,10 @@ fn reconstruction_trials(
     candidates: &[mvgrasp::planner::ScoredGrasp],
     gripper: &mvgrasp::grasp::Gripper,
     params: &PlanParams,
-) -> Result<Vec<Option<mvgrasp::grasp::physics::PhysicsOutcome>>, String> {
+) -> CliResult<Vec<Option<mvgrasp::grasp::physics::PhysicsOutcome>>> {
     use mvgrasp::grasp::physics::{PhysicsObject, simulate_grasp};
     use rayon::prelude::*;
-    let scene =
-        mvgrasp::planner::render_scene(renderer, object, params).map_err(|e| e.to_string())?;
+    let scene = mvgrasp::planner::render_scene(renderer, object, params)?;
     let body = params
         .fusion
         .as_ref()

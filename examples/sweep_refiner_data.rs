@@ -19,6 +19,7 @@
 //! temporary name and renamed), so an interrupted run resumes. When every sample is done,
 //! `dataset.json` records the settings and the features' names.
 
+use mvgrasp::cli::CliResult;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -69,16 +70,13 @@ fn main() -> ExitCode {
     mvgrasp::cli::exit(run(&Args::parse()))
 }
 
-fn run(args: &Args) -> Result<(), String> {
+fn run(args: &Args) -> CliResult<()> {
     std::fs::create_dir_all(&args.out)
         .map_err(|e| format!("cannot create {}: {e}", args.out.display()))?;
     if !(0.0..=1.0).contains(&args.photo_share) {
-        return Err(format!(
-            "--photo-share {}: expected 0 to 1",
-            args.photo_share
-        ));
+        return Err(format!("--photo-share {}: expected 0 to 1", args.photo_share).into());
     }
-    let renderer = Renderer::new(Backend::Auto).map_err(|e| e.to_string())?;
+    let renderer = Renderer::new(Backend::Auto)?;
     let intrinsics = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
     for sample in args.first_sample..args.first_sample + args.samples {
         let done = args.out.join(format!("{sample:05}.done"));
@@ -104,8 +102,8 @@ fn run(args: &Args) -> Result<(), String> {
         "channels_after_features": ["base_m", "truth_m"],
     });
     let path = args.out.join("dataset.json");
-    let text = serde_json::to_string_pretty(&manifest).map_err(|e| e.to_string())? + "\n";
-    std::fs::write(&path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
+    let text = serde_json::to_string_pretty(&manifest)? + "\n";
+    Ok(std::fs::write(&path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))?)
 }
 
 fn write_sample(
@@ -113,21 +111,15 @@ fn write_sample(
     intrinsics: Intrinsics,
     args: &Args,
     sample: u32,
-) -> Result<usize, String> {
+) -> CliResult<usize> {
     let mut rng = ChaCha8Rng::seed_from_u64(args.seed ^ (u64::from(sample) << 20) ^ 0x5f3e);
     let category = Category::ALL[rng.random_range(0..Category::ALL.len())];
     let index = rng.random_range(0..args.per_category.max(1));
-    let object = generate(category, index, 2).map_err(|e| e.to_string())?;
-    let rest = RestingPoses::of(&object.mesh).map_err(|e| e.to_string())?;
+    let object = generate(category, index, 2)?;
+    let rest = RestingPoses::of(&object.mesh)?;
     let offered = rest.len().max(1);
-    let (_, pose) = rest
-        .get(rng.random_range(0..offered))
-        .map_err(|e| e.to_string())?;
-    let com = object
-        .mesh
-        .mass_facts(1000.0)
-        .map_err(|e| e.to_string())?
-        .center_of_mass;
+    let (_, pose) = rest.get(rng.random_range(0..offered))?;
+    let com = object.mesh.mass_facts(1000.0)?.center_of_mass;
     let target = pose.table_from_object.transform_point(com);
     let layout = HemisphereLayout {
         count: rng.random_range(2..=8),
@@ -135,9 +127,7 @@ fn write_sample(
         include_top_down: rng.random_bool(0.5),
         ..HemisphereLayout::paper_training()
     };
-    let cameras = layout
-        .cameras(intrinsics, target, rng.random())
-        .map_err(|e| e.to_string())?;
+    let cameras = layout.cameras(intrinsics, target, rng.random())?;
     let input = RgbInput {
         depth: DepthPredictor::Baseline(RefinedSweep::sweep_params()),
         per_face: rng.random_bool(0.5),
@@ -149,8 +139,7 @@ fn write_sample(
         render_photoreal(renderer, mesh, table_from_object, &cameras, seed).map(|p| p.views)
     } else {
         render_rgb(renderer, mesh, table_from_object, &cameras, &input, seed)
-    }
-    .map_err(|e| e.to_string())?;
+    }?;
     // Half the time the sweep sees the cameras as a calibration gives them: a little off.
     let calibration_error = rng.random_bool(0.5);
     let given: Vec<RgbView> = rendered
@@ -164,7 +153,7 @@ fn write_sample(
             ..view.clone()
         })
         .collect();
-    let swept = sweep_depths(&given, &RefinedSweep::sweep_params()).map_err(|e| e.to_string())?;
+    let swept = sweep_depths(&given, &RefinedSweep::sweep_params())?;
     let mut written = 0;
     for (v, ((view, truth), swept)) in rendered.iter().zip(&swept).enumerate() {
         if v >= args.views_per_sample {

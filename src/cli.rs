@@ -18,9 +18,17 @@ pub struct LoadedObject {
     pub mesh: TriangleMesh,
 }
 
+/// Why a command failed, for its one `error: ...` line: an error of the library (whose
+/// message names the file and the problem) or a message of the command's own. `?` takes
+/// either: any `std::error::Error`, a `String` or a `&str`.
+pub type Failure = Box<dyn std::error::Error + Send + Sync>;
+
+/// What a command's steps return.
+pub type CliResult<T> = Result<T, Failure>;
+
 /// The exit of a command whose `run` gave `result`: success, or the message on one
 /// `error: ...` line and exit code 2.
-pub fn exit(result: Result<(), String>) -> ExitCode {
+pub fn exit(result: CliResult<()>) -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(message) => {
@@ -57,14 +65,14 @@ impl ObjectArgs {
     /// # Errors
     /// A one-line message for the user: the loader's error (naming the file) or a bad
     /// `--category`.
-    pub fn load(&self) -> Result<LoadedObject, String> {
+    pub fn load(&self) -> CliResult<LoadedObject> {
         match &self.mesh {
             Some(path) => {
                 let options = LoadOptions {
                     scale: self.scale,
                     ..Default::default()
                 };
-                let mesh = load_mesh_with(path, &options).map_err(|e| e.to_string())?;
+                let mesh = load_mesh_with(path, &options)?;
                 let stem = path
                     .file_stem()
                     .map_or("mesh".into(), |s| s.to_string_lossy().into_owned());
@@ -79,8 +87,7 @@ impl ObjectArgs {
                     .category
                     .parse()
                     .map_err(|e| format!("--category: {e}"))?;
-                let object =
-                    generate(category, self.index, self.seed).map_err(|e| e.to_string())?;
+                let object = generate(category, self.index, self.seed)?;
                 Ok(LoadedObject {
                     display_name: format!("{} (built-in, seed {})", object.name, self.seed),
                     name: object.name,
@@ -115,7 +122,7 @@ impl LibraryArgs {
     ///
     /// # Errors
     /// A message naming a path that does not exist or a folder with no mesh.
-    pub fn sources(&self) -> Result<Vec<crate::dataset::ObjectSource>, String> {
+    pub fn sources(&self) -> CliResult<Vec<crate::dataset::ObjectSource>> {
         use crate::dataset::ObjectSource;
         if self.mesh.is_empty() {
             let categories = if self.categories.is_empty() {
@@ -146,7 +153,7 @@ impl LibraryArgs {
                 let mut found = Vec::new();
                 collect_meshes(path, &mut found)?;
                 if found.is_empty() {
-                    return Err(format!("{}: no .obj, .stl or .urdf inside", path.display()));
+                    return Err(format!("{}: no .obj, .stl or .urdf inside", path.display()).into());
                 }
                 found.sort();
                 sources.extend(found.into_iter().map(ObjectSource::File));
@@ -158,7 +165,7 @@ impl LibraryArgs {
     }
 }
 
-fn collect_meshes(dir: &std::path::Path, found: &mut Vec<PathBuf>) -> Result<(), String> {
+fn collect_meshes(dir: &std::path::Path, found: &mut Vec<PathBuf>) -> CliResult<()> {
     let entries = std::fs::read_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     for entry in entries {
         let path = entry.map_err(|e| format!("{}: {e}", dir.display()))?.path();
@@ -207,12 +214,14 @@ mod tests {
         );
         let err = library(vec![dir.path().join("nowhere.obj")])
             .sources()
-            .unwrap_err();
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("nowhere.obj"), "{err}");
         std::fs::create_dir_all(dir.path().join("empty")).unwrap();
         let err = library(vec![dir.path().join("empty")])
             .sources()
-            .unwrap_err();
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("no .obj"), "{err}");
     }
 }

@@ -67,7 +67,9 @@ pub(crate) fn library_sources(
         categories,
         library_seed,
     };
-    library.sources().map_err(PyValueError::new_err)
+    library
+        .sources()
+        .map_err(|e| PyValueError::new_err(e.to_string()))
 }
 
 /// How many shards the dataset has.

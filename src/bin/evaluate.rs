@@ -11,6 +11,7 @@
 //! after an interruption and it takes up where it stopped (the same settings and seeds give
 //! the same bytes). See `mvgrasp::evaluate`.
 
+use mvgrasp::cli::CliResult;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -135,7 +136,7 @@ fn config_of(args: &Args) -> EvalConfig {
     config
 }
 
-fn run(args: &Args) -> Result<(), String> {
+fn run(args: &Args) -> CliResult<()> {
     let config = config_of(args);
     let known: Vec<&str> = POLICIES.iter().map(|(n, ..)| *n).collect();
     if let Some(p) = config
@@ -143,10 +144,7 @@ fn run(args: &Args) -> Result<(), String> {
         .iter()
         .find(|p| !known.contains(&p.as_str()))
     {
-        return Err(format!(
-            "--policy {p}: expected one of {}",
-            known.join(", ")
-        ));
+        return Err(format!("--policy {p}: expected one of {}", known.join(", ")).into());
     }
     let mut progress: Box<dyn Progress> = if std::io::stderr().is_terminal() && !args.plain {
         let bar = ProgressBar::new(0);
@@ -158,7 +156,7 @@ fn run(args: &Args) -> Result<(), String> {
     } else {
         Box::new(Lines)
     };
-    let results = evaluate(&config, &args.out, progress.as_mut()).map_err(|e| e.to_string())?;
+    let results = evaluate(&config, &args.out, progress.as_mut())?;
     for (object, why) in &results.skipped {
         eprintln!("not evaluated: {object}: {why}");
     }

@@ -7,6 +7,7 @@
 //!     [--mesh PATH ...] [--per-category N] [--shard K] [--preview PNG] [--backend B] [--quiet]
 //! ```
 
+use mvgrasp::cli::CliResult;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -51,9 +52,9 @@ fn main() -> ExitCode {
     mvgrasp::cli::exit(run(&Args::parse()))
 }
 
-fn run(args: &Args) -> Result<(), String> {
+fn run(args: &Args) -> CliResult<()> {
     let mut config = match &args.config {
-        Some(path) => GraspDatasetConfig::from_file(path).map_err(|e| e.to_string())?,
+        Some(path) => GraspDatasetConfig::from_file(path)?,
         None => GraspDatasetConfig::default(),
     };
     if let Some(seed) = args.seed {
@@ -66,17 +67,15 @@ fn run(args: &Args) -> Result<(), String> {
         )
     })?;
     let sources = args.objects.sources()?;
-    let renderer = Renderer::new(backend).map_err(|e| e.to_string())?;
+    let renderer = Renderer::new(backend)?;
     let started = Instant::now();
     let totals = match args.shard {
         Some(index) => {
-            let plan = DatasetPlan::new(&sources, &config).map_err(|e| e.to_string())?;
+            let plan = DatasetPlan::new(&sources, &config)?;
             std::fs::create_dir_all(&args.out)
                 .map_err(|e| format!("{}: {e}", args.out.display()))?;
-            generate_shard(&renderer, &plan, &args.out, index).map_err(|e| e.to_string())?;
-            plan.write_manifest(&args.out)
-                .map_err(|e| e.to_string())?
-                .totals
+            generate_shard(&renderer, &plan, &args.out, index)?;
+            plan.write_manifest(&args.out)?.totals
         }
         None => {
             if !args.quiet {
@@ -86,8 +85,7 @@ fn run(args: &Args) -> Result<(), String> {
                     renderer.adapter_info()
                 );
             }
-            let summary = generate(&renderer, &sources, &config, &args.out, !args.quiet)
-                .map_err(|e| e.to_string())?;
+            let summary = generate(&renderer, &sources, &config, &args.out, !args.quiet)?;
             if !args.quiet {
                 eprintln!(
                     "{} shards written, {} already done",
@@ -99,7 +97,7 @@ fn run(args: &Args) -> Result<(), String> {
     };
     let seconds = started.elapsed().as_secs_f64();
     if let Some(png) = &args.preview {
-        write_preview(&args.out, png, 24, 12).map_err(|e| e.to_string())?;
+        write_preview(&args.out, png, 24, 12)?;
     }
     let rate = |n: usize, of: usize| {
         if of == 0 {

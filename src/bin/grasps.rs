@@ -5,6 +5,7 @@
 //! cargo run --release --bin grasps -- [--mesh PATH | --category C --index I] [--n 100]
 //!     [--gripper panda|yumi|robotiq_2f_85|FILE] [--pose K] [--physics-trials N] [--out DIR]
 
+use mvgrasp::cli::CliResult;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -52,11 +53,11 @@ fn main() -> ExitCode {
     mvgrasp::cli::exit(run(&Args::parse()))
 }
 
-fn load_gripper(spec: &str) -> Result<Gripper, String> {
-    Gripper::from_name_or_file(spec).map_err(|e| format!("--gripper: {e}"))
+fn load_gripper(spec: &str) -> CliResult<Gripper> {
+    Ok(Gripper::from_name_or_file(spec).map_err(|e| format!("--gripper: {e}"))?)
 }
 
-fn load_config(args: &Args) -> Result<AnalysisConfig, String> {
+fn load_config(args: &Args) -> CliResult<AnalysisConfig> {
     let mut config = match &args.config {
         Some(path) => {
             let text = std::fs::read_to_string(path)
@@ -97,27 +98,26 @@ struct Output<'a> {
     analysis: &'a mvgrasp::grasp::Analysis,
 }
 
-fn run(args: &Args) -> Result<(), String> {
+fn run(args: &Args) -> CliResult<()> {
     let started = Instant::now();
     let gripper = load_gripper(&args.gripper)?;
     let config = load_config(args)?;
     let loaded = args.object.load()?;
     let name = &loaded.display_name;
-    let rest = RestingPoses::of(&loaded.mesh).map_err(|e| e.to_string())?;
+    let rest = RestingPoses::of(&loaded.mesh)?;
     let k = args.pose.unwrap_or(0);
     let (pose_index, pose) = rest.get(k).map_err(|e| format!("--pose {k}: {e}"))?;
     if rest.only_marginal() {
         eprintln!("{name}: every stable pose is marginal (it rolls or topples): resting it in one");
     }
-    let object = GraspObject::new(loaded.mesh).map_err(|e| e.to_string())?;
+    let object = GraspObject::new(loaded.mesh)?;
     let analysis = analyse(
         &object,
         &pose.table_from_object,
         &gripper,
         &config,
         args.object.seed,
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
 
     println!(
         "{name}: stable pose {pose_index} (p = {:.2}), gripper {}",
@@ -141,7 +141,7 @@ fn run(args: &Args) -> Result<(), String> {
         analysis: &analysis,
     };
     let json_path = args.out.join("grasps.json");
-    let json = serde_json::to_string_pretty(&output).map_err(|e| e.to_string())?;
+    let json = serde_json::to_string_pretty(&output)?;
     std::fs::write(&json_path, json)
         .map_err(|e| format!("{}: cannot write: {e}", json_path.display()))?;
     let best: Vec<_> = analysis.grasps.iter().take(5).map(|g| g.grasp).collect();

@@ -7,6 +7,7 @@
 //!     [--mesh FILE_OR_FOLDER ...]
 //! ```
 
+use mvgrasp::cli::CliResult;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -47,7 +48,7 @@ fn main() -> ExitCode {
     mvgrasp::cli::exit(run(&Args::parse()))
 }
 
-fn run(args: &Args) -> Result<(), String> {
+fn run(args: &Args) -> CliResult<()> {
     let preset: IntrinsicsPreset = args.camera.parse().map_err(|e| format!("--camera: {e}"))?;
     let backend = Backend::parse(&args.backend).ok_or_else(|| {
         format!(
@@ -62,7 +63,7 @@ fn run(args: &Args) -> Result<(), String> {
         table: !args.no_table,
         ..Default::default()
     };
-    let renderer = Renderer::new(backend).map_err(|e| e.to_string())?;
+    let renderer = Renderer::new(backend)?;
     if !args.quiet {
         eprintln!(
             "rendering {} objects with {}",
@@ -71,8 +72,7 @@ fn run(args: &Args) -> Result<(), String> {
         );
     }
     let started = Instant::now();
-    let summary = write_dataset(&renderer, &sources, &config, &args.out, !args.quiet)
-        .map_err(|e| e.to_string())?;
+    let summary = write_dataset(&renderer, &sources, &config, &args.out, !args.quiet)?;
     let seconds = started.elapsed().as_secs_f64();
     println!(
         "{} objects written ({} views, {:.1} views/s), {} already done, in {:.1} s: {}",

@@ -16,6 +16,9 @@ use mvgrasp_grasp::quality::{RobustQualityParams, robust_qualities};
 use mvgrasp_grasp::{Grasp, GraspObject, Gripper, SamplingParams, sample_antipodal};
 use rayon::prelude::*;
 
+/// Any error, for the one `error: ...` line.
+type CliResult<T> = Result<T, Box<dyn std::error::Error + Send + Sync>>;
+
 fn main() -> ExitCode {
     match run() {
         Ok(()) => ExitCode::SUCCESS,
@@ -26,12 +29,12 @@ fn main() -> ExitCode {
     }
 }
 
-fn run() -> Result<(), String> {
+fn run() -> CliResult<()> {
     let mut meshes: Vec<(String, TriangleMesh)> = Vec::new();
-    let mug = default_object().map_err(|e| e.to_string())?;
+    let mug = default_object()?;
     meshes.push((format!("{} (built-in)", mug.name), mug.mesh));
     for path in std::env::args().skip(1) {
-        let mesh = load_mesh(&path).map_err(|e| e.to_string())?;
+        let mesh = load_mesh(&path)?;
         let name = path.rsplit('/').next().unwrap_or(&path).to_string();
         meshes.push((name, mesh));
     }
@@ -42,20 +45,16 @@ fn run() -> Result<(), String> {
     println!("|---|---|---|---|---|---|---|---|");
     for (name, mesh) in meshes {
         let triangles = mesh.triangles().len();
-        let rest = RestingPoses::of(&mesh).map_err(|e| e.to_string())?;
-        let pose = rest.get(0).map_err(|e| e.to_string())?.1.table_from_object;
-        let object = GraspObject::new(mesh).map_err(|e| e.to_string())?;
-        let physics_object = PhysicsObject::from_grasp_object(&object, &Default::default())
-            .map_err(|e| e.to_string())?;
+        let rest = RestingPoses::of(&mesh)?;
+        let pose = rest.get(0)?.1.table_from_object;
+        let object = GraspObject::new(mesh)?;
+        let physics_object = PhysicsObject::from_grasp_object(&object, &Default::default())?;
         let mut thread_counts = vec![1];
         if threads > 1 {
             thread_counts.push(threads);
         }
         for n in thread_counts {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(n)
-                .build()
-                .map_err(|e| e.to_string())?;
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(n).build()?;
             let row = pool.install(|| measure(&object, &physics_object, &pose))?;
             println!(
                 "| {name} | {triangles} | {n} | {:.0} | {:.0} | {:.0} | {:.1} | {:.1} |",
@@ -82,7 +81,7 @@ fn measure(
     object: &GraspObject,
     physics_object: &PhysicsObject,
     table_from_object: &mvgrasp_geometry::Pose3,
-) -> Result<Row, String> {
+) -> CliResult<Row> {
     let gripper = Gripper::default();
     let params = SamplingParams {
         target_grasps: 300,
@@ -90,8 +89,7 @@ fn measure(
         ..SamplingParams::default()
     };
     let started = Instant::now();
-    let report = sample_antipodal(object, &gripper, &params, Some(table_from_object), 1)
-        .map_err(|e| e.to_string())?;
+    let report = sample_antipodal(object, &gripper, &params, Some(table_from_object), 1)?;
     let seconds = started.elapsed().as_secs_f64();
     let poses: Vec<_> = report
         .grasps
@@ -102,7 +100,7 @@ fn measure(
     let started = Instant::now();
     let rounds = 3;
     for round in 0..rounds {
-        robust_qualities(object, &poses, &gripper, &quality, round).map_err(|e| e.to_string())?;
+        robust_qualities(object, &poses, &gripper, &quality, round)?;
     }
     let robust_per_s = (rounds as usize * poses.len()) as f64 / started.elapsed().as_secs_f64();
     let physics = PhysicsParams::default();
@@ -133,9 +131,8 @@ fn measure(
             let t = Instant::now();
             simulate_grasp(physics_object, table_from_object, grasp, &gripper, &physics)
                 .map(|_| t.elapsed().as_secs_f64() * 1e3)
-                .map_err(|e| e.to_string())
         })
-        .collect::<Result<Vec<f64>, String>>()?;
+        .collect::<Result<Vec<f64>, _>>()?;
     let trials_per_s = trials.len() as f64 / started.elapsed().as_secs_f64();
     trial_ms.sort_by(f64::total_cmp);
     Ok(Row {

@@ -20,6 +20,9 @@ use std::time::Instant;
 use clap::Parser;
 use mvgrasp_infer::{Gqcnn, GqcnnWorkspace, Parallelism, Tensor};
 
+/// Any error, for the one `error: ...` line.
+type CliResult<T> = Result<T, Box<dyn std::error::Error + Send + Sync>>;
+
 /// GQ-CNN throughput of the Rust runtime, JSON lines on stdout.
 #[derive(Parser)]
 struct Args {
@@ -52,7 +55,7 @@ fn main() -> ExitCode {
     }
 }
 
-fn run(args: Args) -> Result<(), String> {
+fn run(args: Args) -> CliResult<()> {
     if args.threads == 0 || args.batches.contains(&0) {
         return Err("--threads and every batch size must be at least 1".into());
     }
@@ -60,13 +63,10 @@ fn run(args: Args) -> Result<(), String> {
         1 => Parallelism::Sequential,
         threads => Parallelism::Rayon { threads },
     };
-    let net = Gqcnn::load(&args.model)
-        .map_err(|e| e.to_string())?
-        .with_parallelism(par);
+    let net = Gqcnn::load(&args.model)?.with_parallelism(par);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads)
-        .build()
-        .map_err(|e| e.to_string())?;
+        .build()?;
     let arch = net.architecture();
     let (size, pose_inputs) = (arch.image_size_px, arch.pose_inputs);
     let model = args.model.display().to_string();
@@ -74,20 +74,20 @@ fn run(args: Args) -> Result<(), String> {
         let (depth, pose) = inputs(batch, size, pose_inputs, args.seed)?;
         let mut workspace = GqcnnWorkspace::default();
         let mut call = || net.predict(&depth, &pose, &mut workspace);
-        let (times, mean_p) = pool.install(|| -> Result<(Vec<f64>, f64), String> {
+        let (times, mean_p) = pool.install(|| -> CliResult<(Vec<f64>, f64)> {
             let mut p = Vec::new();
             let warm = Instant::now();
             for i in 0.. {
                 if i >= 2 && warm.elapsed().as_secs_f64() >= args.warmup_seconds {
                     break;
                 }
-                p = call().map_err(|e| e.to_string())?;
+                p = call()?;
             }
             let mut times = Vec::new();
             let started = Instant::now();
             while times.len() < 5 || started.elapsed().as_secs_f64() < args.seconds {
                 let t = Instant::now();
-                p = call().map_err(|e| e.to_string())?;
+                p = call()?;
                 times.push(t.elapsed().as_secs_f64());
             }
             let mean_p = p.iter().map(|&v| f64::from(v)).sum::<f64>() / batch as f64;
@@ -132,12 +132,7 @@ impl SplitMix64 {
 
 /// `batch` depth crops `[batch, 1, size, size]` (0.6..0.75 m) and poses `[batch, P]` (grasp
 /// depth 0.6..0.75 m, then theta 0..1.57 rad): crops first, then poses, row by row.
-fn inputs(
-    batch: usize,
-    size: usize,
-    pose_inputs: usize,
-    seed: u64,
-) -> Result<(Tensor, Tensor), String> {
+fn inputs(batch: usize, size: usize, pose_inputs: usize, seed: u64) -> CliResult<(Tensor, Tensor)> {
     let mut rng = SplitMix64(seed);
     let depth = (0..batch * size * size)
         .map(|_| rng.uniform(0.6, 0.75))
@@ -149,8 +144,8 @@ fn inputs(
         })
         .collect();
     Ok((
-        Tensor::new(&[batch, 1, size, size], depth).map_err(|e| e.to_string())?,
-        Tensor::new(&[batch, pose_inputs], pose).map_err(|e| e.to_string())?,
+        Tensor::new(&[batch, 1, size, size], depth)?,
+        Tensor::new(&[batch, pose_inputs], pose)?,
     ))
 }
 

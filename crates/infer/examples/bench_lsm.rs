@@ -21,6 +21,9 @@ use mvgrasp_infer::model::Weights;
 use mvgrasp_infer::ops::CameraMatrices;
 use mvgrasp_infer::{Lsm, Parallelism};
 
+/// Any error, for the one `error: ...` line.
+type CliResult<T> = Result<T, Box<dyn std::error::Error + Send + Sync>>;
+
 /// LSM prediction time of the Rust runtime, one JSON line on stdout.
 #[derive(Parser)]
 struct Args {
@@ -46,7 +49,7 @@ fn main() -> ExitCode {
     }
 }
 
-fn run(args: Args) -> Result<(), String> {
+fn run(args: Args) -> CliResult<()> {
     if args.threads == 0 {
         return Err("--threads must be at least 1".into());
     }
@@ -54,11 +57,9 @@ fn run(args: Args) -> Result<(), String> {
         1 => Parallelism::Sequential,
         threads => Parallelism::Rayon { threads },
     };
-    let net = Lsm::load(&args.model)
-        .map_err(|e| e.to_string())?
-        .with_parallelism(par);
-    let mut inputs = Weights::load(&args.inputs).map_err(|e| e.to_string())?;
-    let mut take = |name: &str| inputs.take_any(name).map_err(|e| e.to_string());
+    let net = Lsm::load(&args.model)?.with_parallelism(par);
+    let mut inputs = Weights::load(&args.inputs)?;
+    let mut take = |name: &str| inputs.take_any(name);
     let (images, k, pose) = (take("images")?, take("k")?, take("camera_from_world")?);
     // An optional grid centre (one view's: its axis alone does not place the grid).
     let centre = match inputs.take_any("centre") {
@@ -68,7 +69,8 @@ fn run(args: Args) -> Result<(), String> {
                 "{}: centre {:?}, expected [3]",
                 args.inputs.display(),
                 c.shape()
-            ));
+            )
+            .into());
         }
         Err(_) => None,
     };
@@ -79,7 +81,8 @@ fn run(args: Args) -> Result<(), String> {
             args.inputs.display(),
             k.shape(),
             pose.shape()
-        ));
+        )
+        .into());
     }
     let cameras: Vec<CameraMatrices> = (0..views)
         .map(|v| CameraMatrices {
@@ -91,21 +94,20 @@ fn run(args: Args) -> Result<(), String> {
         .collect();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads)
-        .build()
-        .map_err(|e| e.to_string())?;
+        .build()?;
     let predict = || match centre {
         Some(c) => net.predict_in(&images, &cameras, c),
         None => net.predict(&images, &cameras),
     };
-    let (times, depth) = pool.install(|| -> Result<_, String> {
+    let (times, depth) = pool.install(|| -> CliResult<_> {
         // Two warm-up calls.
-        predict().map_err(|e| e.to_string())?;
-        let mut depth = predict().map_err(|e| e.to_string())?;
+        predict()?;
+        let mut depth = predict()?;
         let mut times = Vec::new();
         let started = Instant::now();
         while times.len() < 5 || started.elapsed().as_secs_f64() < args.seconds {
             let t = Instant::now();
-            depth = predict().map_err(|e| e.to_string())?;
+            depth = predict()?;
             times.push(t.elapsed().as_secs_f64());
         }
         Ok((times, depth))

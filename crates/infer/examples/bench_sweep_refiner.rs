@@ -19,6 +19,9 @@ use clap::Parser;
 use mvgrasp_infer::model::Weights;
 use mvgrasp_infer::{Parallelism, SweepRefiner};
 
+/// Any error, for the one `error: ...` line.
+type CliResult<T> = Result<T, Box<dyn std::error::Error + Send + Sync>>;
+
 /// Sweep refiner time of the Rust runtime, one JSON line on stdout.
 #[derive(Parser)]
 struct Args {
@@ -44,7 +47,7 @@ fn main() -> ExitCode {
     }
 }
 
-fn run(args: Args) -> Result<(), String> {
+fn run(args: Args) -> CliResult<()> {
     if args.threads == 0 {
         return Err("--threads must be at least 1".into());
     }
@@ -52,26 +55,23 @@ fn run(args: Args) -> Result<(), String> {
         1 => Parallelism::Sequential,
         threads => Parallelism::Rayon { threads },
     };
-    let net = SweepRefiner::load(&args.model)
-        .map_err(|e| e.to_string())?
-        .with_parallelism(par);
-    let mut inputs = Weights::load(&args.inputs).map_err(|e| e.to_string())?;
+    let net = SweepRefiner::load(&args.model)?.with_parallelism(par);
+    let mut inputs = Weights::load(&args.inputs)?;
     let mut views = Vec::new();
     while let Ok(features) = inputs.take_any(&format!("features.{}", views.len())) {
         views.push(features);
     }
     if views.is_empty() {
-        return Err(format!("{}: no features.0", args.inputs.display()));
+        return Err(format!("{}: no features.0", args.inputs.display()).into());
     }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads)
-        .build()
-        .map_err(|e| e.to_string())?;
-    let pass = || -> Result<f64, String> {
+        .build()?;
+    let pass = || -> CliResult<f64> {
         let mut sum = 0.0f64;
         let mut count = 0usize;
         for features in &views {
-            let out = net.predict(features).map_err(|e| e.to_string())?;
+            let out = net.predict(features)?;
             sum += out
                 .correction_m
                 .data()
@@ -82,7 +82,7 @@ fn run(args: Args) -> Result<(), String> {
         }
         Ok(sum / count.max(1) as f64)
     };
-    let (times, mean) = pool.install(|| -> Result<_, String> {
+    let (times, mean) = pool.install(|| -> CliResult<_> {
         pass()?;
         let mut mean = pass()?;
         let mut times = Vec::new();

@@ -18,6 +18,7 @@
 //! and nothing is simulated (there is no mesh). `--rgb DIR` plans on a folder of RGB views
 //! with their cameras.
 
+use mvgrasp::cli::CliResult;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -195,11 +196,11 @@ struct Report<'a> {
 fn hold_probability(
     best: Option<&ScoredGrasp>,
     source: Option<ChanceSource>,
-) -> Result<Option<f32>, String> {
+) -> CliResult<Option<f32>> {
     let (Some(best), Some(source)) = (best, source) else {
         return Ok(None);
     };
-    source.of(best).map_err(|e| e.to_string())
+    Ok(source.of(best)?)
 }
 
 /// `--min-probability`: checked before planning (a value in [0, 1], and a planner with a
@@ -208,14 +209,12 @@ fn check_min_probability(
     args: &Args,
     source: Option<ChanceSource>,
     chance: Option<f32>,
-) -> Result<(bool, String), String> {
+) -> CliResult<(bool, String)> {
     let Some(min) = args.min_probability else {
         return Ok((true, String::new()));
     };
     if !(0.0..=1.0).contains(&min) {
-        return Err(format!(
-            "--min-probability {min}: expected a chance from 0 to 1"
-        ));
+        return Err(format!("--min-probability {min}: expected a chance from 0 to 1").into());
     }
     if source.is_none() {
         return Err(
@@ -235,7 +234,7 @@ fn check_min_probability(
 }
 
 /// Plans; `Ok(false)` when no grasp was found.
-fn run(args: &Args) -> Result<bool, String> {
+fn run(args: &Args) -> CliResult<bool> {
     if let Some(depth) = &args.depth {
         return run_on_sensor_depth(args, depth);
     }
@@ -253,8 +252,7 @@ fn run(args: &Args) -> Result<bool, String> {
             views_seed: args.object.seed,
             ..Default::default()
         },
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     let depth_from = depth_from_of(args)?;
     if args.photo && depth_from.is_none() {
         return Err("--photo renders the colour views depth is predicted from; \
@@ -274,15 +272,15 @@ fn run(args: &Args) -> Result<bool, String> {
     let (model_name, net) = load_model(&model_of(args))?;
     let source = options.chance_source(&model_name, false);
     check_min_probability(args, source, None)?;
-    let (planner, params) = options.on_mesh(net).map_err(|e| e.to_string())?;
+    let (planner, params) = options.on_mesh(net)?;
     let backend = Backend::parse(&args.backend).ok_or_else(|| {
         format!(
             "--backend: unknown backend {:?} (expected auto, vulkan, gl, metal, dx12)",
             args.backend
         )
     })?;
-    let renderer = Renderer::new(backend).map_err(|e| e.to_string())?;
-    let plan = plan_grasp(&renderer, &object.mesh, &planner, &params).map_err(|e| e.to_string())?;
+    let renderer = Renderer::new(backend)?;
+    let plan = plan_grasp(&renderer, &object.mesh, &planner, &params)?;
     // Depth from RGB: the same run on the rendered depth, beside it.
     let on_truth = match params.depth_from_rgb {
         Some(_) => {
@@ -290,7 +288,7 @@ fn run(args: &Args) -> Result<bool, String> {
                 depth_from_rgb: None,
                 ..params.clone()
             };
-            Some(plan_grasp(&renderer, &object.mesh, &planner, &truth).map_err(|e| e.to_string())?)
+            Some(plan_grasp(&renderer, &object.mesh, &planner, &truth)?)
         }
         None => None,
     };
@@ -306,7 +304,7 @@ fn run(args: &Args) -> Result<bool, String> {
             hold_probability: chance,
             on_rendered_depth: on_truth.as_ref(),
         };
-        let json = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
+        let json = serde_json::to_string_pretty(&report)?;
         println!("{json}");
     } else {
         print!("{}", description.summary());
@@ -335,8 +333,7 @@ fn run(args: &Args) -> Result<bool, String> {
         )?;
         if !plan.rgb_views.is_empty() {
             let picture = out.join("views.png");
-            write_contact_sheet(&picture, &plan.rgb_views, &plan.scene_views, &plan.top)
-                .map_err(|e| e.to_string())?;
+            write_contact_sheet(&picture, &plan.rgb_views, &plan.scene_views, &plan.top)?;
         }
     }
     Ok(plan.best.is_some() && reaches)
@@ -357,35 +354,34 @@ fn write_outputs(
     file: &GraspsFile,
     views: &[View],
     grasps: &[ScoredGrasp],
-) -> Result<(), String> {
+) -> CliResult<()> {
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
-    let json = file.to_json().map_err(|e| e.to_string())?;
+    let json = file.to_json()?;
     let path = out.join("grasps.json");
     std::fs::write(&path, json).map_err(|e| format!("{}: {e}", path.display()))?;
     for (i, view) in views.iter().enumerate() {
         let picture = out.join(format!("overlay_{i}.png"));
-        write_overlay(&picture, &view.depth, i, grasps).map_err(|e| e.to_string())?;
+        write_overlay(&picture, &view.depth, i, grasps)?;
     }
     if !views.is_empty() {
-        write_plan_log(&out.join("plan.mcap"), views, file.table.as_ref(), grasps)
-            .map_err(|e| e.to_string())?;
+        write_plan_log(&out.join("plan.mcap"), views, file.table.as_ref(), grasps)?;
     }
     Ok(())
 }
 
 /// `--depth-from`: the predictor, or `None` for rendered depth (a mesh only).
-fn depth_from_of(args: &Args) -> Result<Option<DepthFrom>, String> {
+fn depth_from_of(args: &Args) -> CliResult<Option<DepthFrom>> {
     match args.depth_from.as_deref() {
         None => Ok(Some(DepthFrom::DEFAULT)),
         Some("rendered") if args.rgb.is_none() => Ok(None),
-        Some(name) => name.parse().map(Some).map_err(|e| {
+        Some(name) => Ok(name.parse().map(Some).map_err(|e| {
             let rendered = if args.rgb.is_none() {
                 ", or rendered"
             } else {
                 ""
             };
             format!("--depth-from: {e}{rendered}")
-        }),
+        })?),
     }
 }
 
@@ -412,14 +408,14 @@ fn options_of(args: &Args) -> PlanOptions {
 /// `--views-dir`).
 fn sensor_setup(
     args: &Args,
-) -> Result<(String, Planner, mvgrasp::grasp::Gripper, SensorPlanParams), String> {
+) -> CliResult<(String, Planner, mvgrasp::grasp::Gripper, SensorPlanParams)> {
     let (model_name, net) = load_model(&model_of(args))?;
-    let (planner, gripper, params) = options_of(args).on_depth(net).map_err(|e| e.to_string())?;
+    let (planner, gripper, params) = options_of(args).on_depth(net)?;
     Ok((model_name, planner, gripper, params))
 }
 
 /// `plan --depth`: a grasp on a sensor's depth image; `Ok(false)` when none was found.
-fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<bool, String> {
+fn run_on_sensor_depth(args: &Args, depth: &Path) -> CliResult<bool> {
     let (model_name, planner, gripper, params) = sensor_setup(args)?;
     let source = options_of(args).chance_source(&model_name, true);
     check_min_probability(args, source, None)?;
@@ -429,13 +425,12 @@ fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<bool, String> {
         camera_pose: args.camera_pose.clone(),
         mask: args.mask.clone(),
     };
-    let report =
-        plan_on_sensor_depth(&planner, &gripper, &files, &params).map_err(|e| e.to_string())?;
+    let report = plan_on_sensor_depth(&planner, &gripper, &files, &params)?;
     let file = GraspsFile::of_sensor(&report);
     let chance = hold_probability(report.best.as_ref(), source)?;
     let (reaches, verdict) = check_min_probability(args, source, chance)?;
     if args.json {
-        println!("{}", file.to_json().map_err(|e| e.to_string())?);
+        println!("{}", file.to_json()?);
     } else {
         print!("{}", sensor_summary(&model_name, &files, &report));
         print!("{}{verdict}", chance_words(chance, source));
@@ -447,7 +442,7 @@ fn run_on_sensor_depth(args: &Args, depth: &Path) -> Result<bool, String> {
 }
 
 /// `plan --views-dir`: a grasp over a folder of views; `Ok(false)` when none was found.
-fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
+fn run_on_views_dir(args: &Args, dir: &Path) -> CliResult<bool> {
     use std::fmt::Write;
     let (model_name, planner, gripper, params) = sensor_setup(args)?;
     let rgb_from = match args.rgb {
@@ -457,9 +452,8 @@ fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
     let source = options_of(args).chance_source_on_views(&model_name, rgb_from);
     check_min_probability(args, source, None)?;
     let (report, depth) = if let Some(from) = rgb_from {
-        let predictor = DepthPredictor::shipped(from).map_err(|e| e.to_string())?;
-        let rgb = plan_on_rgb_dir(&planner, &gripper, dir, &params, &predictor)
-            .map_err(|e| e.to_string())?;
+        let predictor = DepthPredictor::shipped(from)?;
+        let rgb = plan_on_rgb_dir(&planner, &gripper, dir, &params, &predictor)?;
         let depth = format!(
             "depth: predicted from RGB by {} in {:.2} s\n",
             depth_from_words(from),
@@ -467,15 +461,14 @@ fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
         );
         (rgb.plan, depth)
     } else {
-        let report =
-            plan_on_views_dir(&planner, &gripper, dir, &params).map_err(|e| e.to_string())?;
+        let report = plan_on_views_dir(&planner, &gripper, dir, &params)?;
         (report, String::new())
     };
     let file = GraspsFile::of_views(&report);
     let chance = hold_probability(report.best.as_ref(), source)?;
     let (reaches, verdict) = check_min_probability(args, source, chance)?;
     if args.json {
-        println!("{}", file.to_json().map_err(|e| e.to_string())?);
+        println!("{}", file.to_json()?);
     } else {
         let mut s = String::new();
         let _ = writeln!(
@@ -544,19 +537,20 @@ fn run_on_views_dir(args: &Args, dir: &Path) -> Result<bool, String> {
 }
 
 /// A shipped network by name, or an export's JSON by path.
-fn load_model(model: &str) -> Result<(String, Gqcnn), String> {
+fn load_model(model: &str) -> CliResult<(String, Gqcnn)> {
     if let Some(shipped) = models::shipped(model) {
-        let net = shipped.load().map_err(|e| e.to_string())?;
+        let net = shipped.load()?;
         return Ok((shipped.name.to_string(), net));
     }
     let path = Path::new(model);
     if path.extension().is_some_and(|e| e == "json") {
-        let net = Gqcnn::load(path).map_err(|e| e.to_string())?;
+        let net = Gqcnn::load(path)?;
         return Ok((path.display().to_string(), net));
     }
     let names: Vec<&str> = models::ALL.iter().map(|m| m.name).collect();
     Err(format!(
         "--model: {model:?} is neither a shipped network ({}) nor an export's .json",
         names.join(", ")
-    ))
+    )
+    .into())
 }
