@@ -18,12 +18,12 @@
 //! The image is gqcnn's real Primesense `depth_0.npy` under `DATA/real_depth` when it is there,
 //! else a synthetic 4 x 6 cm box on a table 0.7 m below a Primesense (the Python tests' box).
 
-use mvgrasp::cli::CliResult;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use clap::Parser;
+use mvgrasp::cli::CliResult;
 use mvgrasp::geometry::{Camera, Intrinsics, IntrinsicsPreset, Pose3};
 use mvgrasp::grasp::Gripper;
 use mvgrasp::grasps_file::GraspsFile;

@@ -17,12 +17,12 @@
 //! are printed as such: Dex-Net 2.0 planned in 0.8 s a view on a GPU, 2.5 s with the
 //! cross-entropy method (Mahler et al. 2017).
 
-use mvgrasp::cli::CliResult;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
 use clap::Parser;
+use mvgrasp::cli::CliResult;
 use mvgrasp::grasp::GraspObject;
 use mvgrasp::planner::{
     CemParams, Fusion, FusionParams, GqcnnPolicy, MultiViewPlanner, PlanParams, SensorFiles, View,

@@ -13,12 +13,12 @@
 //! frame) as JSON, `--depth-out` the first view's depth (z, metres, 0 = background) as a
 //! little-endian float32 `.npy` of shape (height, width).
 
-use mvgrasp::cli::CliResult;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
 use clap::Parser;
+use mvgrasp::cli::CliResult;
 use mvgrasp_geometry::{Camera, HemisphereLayout, Intrinsics, TriangleMesh, Vec3};
 use mvgrasp_render::{Backend, Colors, IDENTITY, Material, MeshInput, Renderer, View};
 

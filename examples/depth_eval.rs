@@ -27,11 +27,11 @@
 //! (`RAYON_NUM_THREADS`), as the baseline's. `--methods` runs some of them (the hull comes with
 //! the sweep); `--refiner` scores a training run's export instead of the shipped refiner.
 
-use mvgrasp::cli::CliResult;
 use std::process::ExitCode;
 use std::time::Instant;
 
 use clap::Parser;
+use mvgrasp::cli::CliResult;
 use mvgrasp::evaluate::depth::DepthErrors;
 use mvgrasp::geometry::objects::{Category, generate};
 use mvgrasp::geometry::{HemisphereLayout, Intrinsics, IntrinsicsPreset, RestingPoses};

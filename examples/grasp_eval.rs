@@ -10,11 +10,11 @@
 mod common;
 
 use common::{EvalArgs, REAL_MESHES, Rested, analyse_at_rest};
-use mvgrasp::cli::CliResult;
 use std::process::ExitCode;
 use std::time::Instant;
 
 use clap::Parser;
+use mvgrasp::cli::CliResult;
 use mvgrasp::geometry::load_mesh;
 use mvgrasp::grasp::physics::{PhysicsParams, StageCounts};
 use mvgrasp::grasp::{AnalysisConfig, Gripper};

@@ -27,11 +27,11 @@
 mod common;
 
 use common::{EvalArgs, REAL_MESHES, Rested, analyse_at_rest};
-use mvgrasp::cli::CliResult;
 use std::process::ExitCode;
 use std::time::Instant;
 
 use clap::Parser;
+use mvgrasp::cli::CliResult;
 use mvgrasp::geometry::objects::{Category, generate};
 use mvgrasp::geometry::{TriangleMesh, load_mesh};
 use mvgrasp::grasp::physics::{

@@ -10,11 +10,11 @@
 //!
 //! Deterministic by seed (on one renderer).
 
-use mvgrasp::cli::CliResult;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Parser;
+use mvgrasp::cli::CliResult;
 use mvgrasp::geometry::objects::{Category, generate};
 use mvgrasp::geometry::{HemisphereLayout, Intrinsics, IntrinsicsPreset, RestingPoses};
 use mvgrasp::images::write_png8;

@@ -19,13 +19,13 @@
 //! temporary name and renamed), so an interrupted run resumes. When every sample is done,
 //! `dataset.json` records the settings and the features' names.
 
-use mvgrasp::cli::CliResult;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 mod common;
 
 use clap::Parser;
+use mvgrasp::cli::CliResult;
 use mvgrasp::geometry::objects::{Category, generate};
 use mvgrasp::geometry::{
     Camera, HemisphereLayout, Intrinsics, IntrinsicsPreset, Pose3, RestingPoses, Rot3, Vec3,

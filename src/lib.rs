@@ -13,6 +13,7 @@
 pub mod cli;
 pub mod convert;
 pub mod dataset;
+pub mod depth_from_rgb;
 pub mod error;
 pub mod evaluate;
 pub mod grasp_dataset;

@@ -16,6 +16,7 @@
 use mvgrasp_infer::ops::{CameraMatrices, resize_area, resize_bilinear};
 use mvgrasp_infer::{Lsm, Tensor};
 
+use crate::depth_from_rgb::{DepthFrom, DepthFromRgb, PredictedDepth};
 use crate::error::{Error, Result};
 use crate::stereo::{RgbView, table_depth};
 
@@ -157,5 +158,22 @@ fn camera_matrices(view: &RgbView, sx: f32, sy: f32) -> CameraMatrices {
             [0.0, 0.0, 1.0],
         ],
         camera_from_world: std::array::from_fn(|r| m.row(r).to_array()),
+    }
+}
+
+impl DepthFromRgb for Lsm {
+    fn name(&self) -> &str {
+        DepthFrom::Lsm.name()
+    }
+
+    /// [`lsm_depths`]; the network gives no confidence.
+    fn predict(&self, views: &[RgbView]) -> Result<Vec<PredictedDepth>> {
+        Ok(lsm_depths(self, views)?
+            .into_iter()
+            .map(|depth_m| PredictedDepth {
+                depth_m,
+                confidence: None,
+            })
+            .collect())
     }
 }

@@ -12,9 +12,12 @@
 //! the caller's threshold is left missing (0): the planner's fused model treats it as unseen
 //! space, which the hand may not enter.
 
+use std::sync::Arc;
+
 use mvgrasp_infer::ops::resize_area;
 use mvgrasp_infer::{Mvs, Tensor};
 
+use crate::depth_from_rgb::{DepthFrom, DepthFromRgb, PredictedDepth};
 use crate::error::{Error, Result};
 use crate::lsm::{network_inputs, to_camera_size};
 use crate::stereo::{RgbView, table_depth};
@@ -131,6 +134,32 @@ fn on_object_resolution(
         }
     }
     Ok(out)
+}
+
+/// The multi-view stereo network as a depth method: pixels whose confidence is below
+/// `min_confidence` left missing ([`mvs_depths`]).
+#[derive(Clone, Debug)]
+pub struct MvsDepth {
+    /// The network.
+    pub net: Arc<Mvs>,
+    /// Pixels whose confidence is below this are left missing (0).
+    pub min_confidence: f32,
+}
+
+impl DepthFromRgb for MvsDepth {
+    fn name(&self) -> &str {
+        DepthFrom::Mvs.name()
+    }
+
+    fn predict(&self, views: &[RgbView]) -> Result<Vec<PredictedDepth>> {
+        Ok(mvs_depths(&self.net, views, self.min_confidence)?
+            .into_iter()
+            .map(|view| PredictedDepth {
+                depth_m: view.depth_m,
+                confidence: Some(view.confidence),
+            })
+            .collect())
+    }
 }
 
 #[cfg(test)]

@@ -19,6 +19,7 @@ use std::sync::Arc;
 
 use mvgrasp_infer::{SweepRefiner, Tensor};
 
+use crate::depth_from_rgb::{DepthFrom, DepthFromRgb, PredictedDepth};
 use crate::error::{Error, Result};
 use crate::stereo::{RgbView, SweepParams, SweptDepth, sweep_depths};
 
@@ -264,6 +265,24 @@ impl RefinedSweep {
             depth_m,
             confidence,
         })
+    }
+}
+
+impl DepthFromRgb for RefinedSweep {
+    fn name(&self) -> &str {
+        DepthFrom::Refined.name()
+    }
+
+    /// [`RefinedSweep::depths`], with the network's confidence.
+    fn predict(&self, views: &[RgbView]) -> Result<Vec<PredictedDepth>> {
+        Ok(self
+            .depths(views)?
+            .into_iter()
+            .map(|view| PredictedDepth {
+                depth_m: view.depth_m,
+                confidence: Some(view.confidence),
+            })
+            .collect())
     }
 }
 

@@ -188,9 +188,10 @@ fn the_shipped_mvs_predicts_the_box_within_its_measured_error_and_marks_doubt_as
     let rgb = read_rgb_dir(&test).unwrap();
     let truth = read_views_dir(&test).unwrap();
     let shipped = DepthPredictor::shipped(DepthFrom::Mvs).unwrap();
-    let DepthPredictor::Mvs { net, .. } = &shipped else {
+    let DepthPredictor::Mvs(mvs) = &shipped else {
         panic!("the shipped MVS predictor is {shipped:?}");
     };
+    let net = &mvs.net;
     let predicted = mvs_depths(net, &rgb[..5], 0.0).unwrap();
     assert_eq!(predicted.len(), 5);
     // The top-down view's box pixels: every one predicted, the median error within the

@@ -11,13 +11,13 @@
 //! after an interruption and it takes up where it stopped (the same settings and seeds give
 //! the same bytes). See `mvgrasp::evaluate`.
 
-use mvgrasp::cli::CliResult;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Parser;
 use indicatif::{ProgressBar, ProgressStyle};
+use mvgrasp::cli::CliResult;
 use mvgrasp::evaluate::grasps::POLICIES;
 use mvgrasp::evaluate::{EvalConfig, Lines, Progress, evaluate};
 

@@ -7,13 +7,12 @@
 //!     [--mesh PATH ...] [--per-category N] [--shard K] [--preview PNG] [--backend B] [--quiet]
 //! ```
 
-use mvgrasp::cli::CliResult;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
 use clap::Parser;
-use mvgrasp::cli::LibraryArgs;
+use mvgrasp::cli::{CliResult, LibraryArgs};
 use mvgrasp::grasp_dataset::preview::write_preview;
 use mvgrasp::grasp_dataset::{DatasetPlan, GraspDatasetConfig, generate, generate_shard};
 use mvgrasp::render::{Backend, Renderer};

@@ -5,13 +5,12 @@
 //! cargo run --release --bin grasps -- [--mesh PATH | --category C --index I] [--n 100]
 //!     [--gripper panda|yumi|robotiq_2f_85|FILE] [--pose K] [--physics-trials N] [--out DIR]
 
-use mvgrasp::cli::CliResult;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
 use clap::Parser;
-use mvgrasp::cli::ObjectArgs;
+use mvgrasp::cli::{CliResult, ObjectArgs};
 use mvgrasp::geometry::RestingPoses;
 use mvgrasp::grasp::physics::PhysicsParams;
 use mvgrasp::grasp::{AnalysisConfig, GraspObject, Gripper, analyse};

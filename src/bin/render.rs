@@ -7,13 +7,12 @@
 //!     [--mesh FILE_OR_FOLDER ...]
 //! ```
 
-use mvgrasp::cli::CliResult;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
 use clap::Parser;
-use mvgrasp::cli::LibraryArgs;
+use mvgrasp::cli::{CliResult, LibraryArgs};
 use mvgrasp::dataset::{DatasetConfig, write_dataset};
 use mvgrasp::geometry::{Intrinsics, IntrinsicsPreset};
 use mvgrasp::render::{Backend, Renderer};

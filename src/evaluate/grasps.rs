@@ -241,7 +241,7 @@ pub struct GraspRecord {
     pub outcome: String,
     /// The returned grasp's predicted quality.
     pub quality: Option<f32>,
-    /// The returned grasp's chance to hold ([`HoldProbability`]), for the policies that have
+    /// The returned grasp's chance to hold ([`mvgrasp_planner::HoldProbability`]), for the policies that have
     /// one (`rgb`, `depth`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub probability: Option<f32>,

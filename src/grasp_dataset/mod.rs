@@ -2,7 +2,7 @@
 //! meshes, gripper and camera).
 //!
 //! A datapoint is a depth crop centred on a grasp and turned so that its axis runs along the
-//! crop's rows ([`crop`]), the grasp's depth, the view's angle to the table (theta), Dex-Net
+//! crop's rows ([`mvgrasp_planner::crop`]), the grasp's depth, the view's angle to the table (theta), Dex-Net
 //! 2.0's robust label, and for a share of them a rapier trial. Per object: its most probable
 //! stable poses; per pose, antipodal axes sampled and scored once (robust Ferrari-Canny, which
 //! does not depend on the approach), cameras drawn from the configured distribution, depth

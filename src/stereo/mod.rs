@@ -22,7 +22,7 @@
 //! 4. **Winner.** Each object pixel takes its cheapest plane, refined between its neighbours by
 //!    a parabola; a winner costing more than `max_cost` is left missing (0). Without a mask
 //!    every pixel is swept; with one, the others see the table plane (`table`) or nothing.
-//! 5. **Consistency** ([`consistency`]). A winner that no other view's depth confirms (or that
+//! 5. **Consistency** ([`Consistency`]). A winner that no other view's depth confirms (or that
 //!    more views see through than confirm) is a guess: it is left missing, or with masks and
 //!    `hull_where_unconfirmed` it takes the visual hull's depth, which never lies beyond the
 //!    surface.
@@ -52,11 +52,30 @@
 use mvgrasp_geometry::{Camera, Vec3};
 use rayon::prelude::*;
 
+use crate::depth_from_rgb::{DepthFrom, DepthFromRgb, PredictedDepth};
 use crate::error::{Error, Result};
 
 mod band;
 mod consistency;
 mod project;
+
+impl DepthFromRgb for SweepParams {
+    fn name(&self) -> &str {
+        DepthFrom::Baseline.name()
+    }
+
+    /// [`sweep_depths`] with these settings; the sweep gives no confidence.
+    fn predict(&self, views: &[RgbView]) -> Result<Vec<PredictedDepth>> {
+        Ok(sweep_depths(views, self)?
+            .into_iter()
+            .map(|swept| PredictedDepth {
+                depth_m: swept.depth_m,
+                confidence: None,
+            })
+            .collect())
+    }
+}
+
 #[cfg(test)]
 mod reference;
 mod sweep;
@@ -99,7 +118,7 @@ pub struct SweepParams {
     /// The depths swept stay within this distance of the depth of the point the cameras look
     /// at (the least-squares point of their optical axes), metres.
     pub reach_m: f32,
-    /// The multi-view consistency check of the swept depths ([`consistency`]); `None` keeps
+    /// The multi-view consistency check of the swept depths ([`Consistency`]); `None` keeps
     /// every winner.
     pub consistency: Option<Consistency>,
     /// With masks: an object pixel whose depth fails the check takes the visual hull's depth

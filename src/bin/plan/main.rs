@@ -18,12 +18,11 @@
 //! and nothing is simulated (there is no mesh). `--rgb DIR` plans on a folder of RGB views
 //! with their cameras.
 
-use mvgrasp::cli::CliResult;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::Parser;
-use mvgrasp::cli::ObjectArgs;
+use mvgrasp::cli::{CliResult, ObjectArgs};
 use mvgrasp::geometry::{Intrinsics, IntrinsicsPreset};
 use mvgrasp::grasps_file::{GraspsFile, write_contact_sheet, write_overlay};
 use mvgrasp::infer::Gqcnn;
