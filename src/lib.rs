@@ -1,38 +1,22 @@
 //! mvgrasp: 6-DoF parallel-jaw grasp planning from a few RGB cameras, on a laptop CPU.
 //!
-//! This root crate is the pipeline (`planner::plan_grasp`: render the views of an object at
-//! rest on a table ([`scene`]), plan on their depth with a shipped GQ-CNN, check the best grasp
-//! analytically and in physics) and, above it and never imported by it (a test checks), the
-//! RGB-D and grasp dataset generators, the evaluation and the command-line tools; the work is done by the layered crates it re-exports (see ARCHITECTURE.md):
-//! [`geometry`], [`render`], [`grasp`], [`infer`], and `mvgrasp_planner` (planning on depth
-//! images from any source; its types are re-exported in [`planner`]). Depth comes from the
-//! renderer or a sensor, or is predicted from RGB views: the plane sweep ([`stereo`], the
-//! default), the multi-view stereo network ([`mvs`]) or the Learnt Stereo Machine ([`lsm`]).
-//! [`evaluate`] is the project's evaluation (the `evaluate` command).
+//! The runtime (the pipeline `planner::plan_grasp`, planning on a sensor's depth and on RGB
+//! views, depth from RGB behind [`depth_from_rgb`], the files it reads and writes) is the crate
+//! `mvgrasp_runtime`, re-exported here module by module under the same names. This root crate
+//! adds what stands above it and that it never imports (its manifest cannot): the RGB-D and
+//! grasp dataset generators ([`dataset`], [`grasp_dataset`]), the evaluation ([`evaluate`], the
+//! `evaluate` command) and the command-line tools ([`cli`]). The work is done by the layered
+//! crates (ARCHITECTURE.md): [`geometry`], [`render`], [`grasp`], [`infer`] and
+//! `mvgrasp_planner` (planning on depth images from any source; its types are re-exported in
+//! [`planner`]).
 
 pub mod cli;
-pub mod convert;
 pub mod dataset;
-pub mod depth_from_rgb;
-pub mod error;
 pub mod evaluate;
 pub mod grasp_dataset;
-pub mod grasp_image;
-pub mod grasps_file;
-pub mod images;
-pub mod lsm;
-pub mod mcap_log;
-pub mod mvs;
-pub mod planner;
-pub mod report;
-pub mod scene;
-pub mod sensor_files;
-pub mod stereo;
-pub mod sweep_refiner;
 
-pub use error::{Error, ErrorKind, Result};
-pub use mvgrasp_geometry as geometry;
-pub use mvgrasp_grasp as grasp;
-pub use mvgrasp_infer as infer;
-pub use mvgrasp_render as render;
-pub use report::{ObjectReport, ReportParams};
+pub use mvgrasp_runtime::{
+    Error, ErrorKind, ObjectReport, ReportParams, Result, convert, depth_from_rgb, error, geometry,
+    grasp, grasp_image, grasps_file, images, infer, lsm, mcap_log, mvs, planner, render, report,
+    scene, sensor_files, stereo, sweep_refiner,
+};

@@ -18,8 +18,8 @@
 //! the object hold the table plane's depth, as every shipped method gives them.
 //!
 //! ```
-//! use mvgrasp::Result;
-//! use mvgrasp::depth_from_rgb::{DepthFromRgb, PredictedDepth, RgbView};
+//! use mvgrasp_runtime::Result;
+//! use mvgrasp_runtime::depth_from_rgb::{DepthFromRgb, PredictedDepth, RgbView};
 //!
 //! /// Depth that another program predicted for the same views, as a method.
 //! struct Precomputed {
@@ -39,7 +39,8 @@
 //!             .collect())
 //!     }
 //! }
-//! // Then: mvgrasp::planner::plan_on_rgb_views(&planner, &gripper, &views, &params, &method)
+//! // Then: mvgrasp_runtime::planner::plan_on_rgb_views(&planner, &gripper, &views, &params,
+//! //     &method)
 //! ```
 
 use std::sync::Arc;

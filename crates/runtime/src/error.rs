@@ -167,7 +167,7 @@ pub enum Error {
         path: PathBuf,
     },
     /// A shard file that cannot be read as one of the grasp dataset's (see
-    /// [`crate::grasp_dataset::read_shard`]).
+    /// `mvgrasp::grasp_dataset::read_shard`).
     #[error("{path}: not a readable grasp-dataset shard: {problem}")]
     Shard {
         /// What is wrong: the file unreadable, a column missing or of another type or shape.
@@ -234,16 +234,13 @@ impl Error {
     }
 
     /// An [`Error::Io`] for `path`.
-    pub(crate) fn io(
-        op: &'static str,
-        path: &std::path::Path,
-    ) -> impl FnOnce(std::io::Error) -> Self {
+    pub fn io(op: &'static str, path: &std::path::Path) -> impl FnOnce(std::io::Error) -> Self {
         let path = path.to_path_buf();
         move |source| Self::Io { op, source, path }
     }
 
     /// An [`Error::Json`] reading or writing the `what` of `path`.
-    pub(crate) fn json(
+    pub fn json(
         op: &'static str,
         what: &'static str,
         path: &std::path::Path,
@@ -258,7 +255,7 @@ impl Error {
     }
 
     /// This error found in the config file `path` ([`Error::ConfigFile`]).
-    pub(crate) fn in_config(self, path: &std::path::Path) -> Self {
+    pub fn in_config(self, path: &std::path::Path) -> Self {
         Self::ConfigFile {
             source: Box::new(self),
             path: path.to_path_buf(),
