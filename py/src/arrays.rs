@@ -344,9 +344,8 @@ pub(crate) fn optional_pose(
 
 /// A pose as a float64 4x4 array (rows).
 pub(crate) fn pose_array<'py>(py: Python<'py>, pose: &Pose3) -> Bound<'py, PyArray2<f64>> {
-    let m = pose.to_mat4();
-    let cols = m.to_cols_array_2d();
-    Array2::from_shape_fn((4, 4), |(i, j)| f64::from(cols[j][i])).into_pyarray(py)
+    let rows = pose_as_matrix::to_rows(pose);
+    Array2::from_shape_fn((4, 4), |(i, j)| f64::from(rows[i][j])).into_pyarray(py)
 }
 
 /// A float32 3-vector as a `(3,)` float64 array.

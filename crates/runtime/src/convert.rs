@@ -21,11 +21,10 @@ pub fn sides_of(mesh: &TriangleMesh) -> Sides {
     }
 }
 
-/// A pose as the row-major 4x4 matrix the renderer takes.
+/// A pose as the row-major 4x4 matrix the renderer takes
+/// ([`mvgrasp_geometry::pose_as_matrix::to_rows`], as files write it).
 pub fn row_major(pose: &Pose3) -> [[f32; 4]; 4] {
-    // glam is column-major: the columns of the transpose are the rows.
-    let m = pose.to_mat4().transpose();
-    [0, 1, 2, 3].map(|i| m.col(i).to_array())
+    mvgrasp_geometry::pose_as_matrix::to_rows(pose)
 }
 
 /// The rigid pose of a row-major 4x4 matrix (the inverse of [`row_major`]; the bottom row is
