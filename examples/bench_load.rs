@@ -70,16 +70,11 @@ impl LongLived {
             intrinsics: self.intrinsics,
             world_from_camera: Pose3::IDENTITY,
         };
-        let depth = DepthImage::new(self.intrinsics, self.depth_m.clone()).map_err(e2s)?;
-        let view = View::new(0, camera, depth).map_err(e2s)?;
-        let report =
-            plan_on_view(&self.planner, &self.gripper, view, false, &self.params).map_err(e2s)?;
-        Ok(GraspsFile::of_sensor(&report).to_json().map_err(e2s)?)
+        let depth = DepthImage::new(self.intrinsics, self.depth_m.clone())?;
+        let view = View::new(0, camera, depth)?;
+        let report = plan_on_view(&self.planner, &self.gripper, view, false, &self.params)?;
+        Ok(GraspsFile::of_sensor(&report).to_json()?)
     }
-}
-
-fn e2s(e: impl std::fmt::Display) -> String {
-    e.to_string()
 }
 
 /// The process's resident memory, MiB (VmRSS of /proc/self/status; 0 where there is none).
@@ -104,7 +99,7 @@ fn depth_image(data: &Path) -> CliResult<(String, Intrinsics, Vec<f32>)> {
         mask: None,
     };
     if files.depth.is_file() && files.intrinsics.is_file() {
-        let view = read_view(&files).map_err(e2s)?;
+        let view = read_view(&files)?;
         return Ok((
             format!("{} (real Primesense)", files.depth.display()),
             view.camera.intrinsics,
@@ -140,8 +135,8 @@ fn run(args: &Args) -> CliResult<()> {
     }
     let (source, intrinsics, depth_m) = depth_image(&args.data)?;
     let options = PlanOptions::default();
-    let net = models::GQCNN_TOPDOWN.load().map_err(e2s)?;
-    let (planner, gripper, params) = options.on_depth(net).map_err(e2s)?;
+    let net = models::GQCNN_TOPDOWN.load()?;
+    let (planner, gripper, params) = options.on_depth(net)?;
     let planner = LongLived {
         planner,
         gripper,

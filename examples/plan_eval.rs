@@ -400,17 +400,16 @@ fn run(args: &Args) -> CliResult<()> {
             });
         }
         let gripper = params.labels.gripper.clone();
-        let load = |model: ShippedModel| {
+        let load = |model: ShippedModel| -> CliResult<Gqcnn> {
             let replacement = if model.name == models::GQCNN_TOPDOWN.name {
                 &args.gqcnn
             } else {
                 &args.mvgqcnn
             };
-            let net: CliResult<Gqcnn> = match replacement {
-                Some(path) => Ok(Gqcnn::load(path)?),
-                None => Ok(model.load()?),
-            };
-            net
+            Ok(match replacement {
+                Some(path) => Gqcnn::load(path)?,
+                None => model.load()?,
+            })
         };
         let mut policy = GqcnnPolicy::new(load(p.model)?, gripper.max_opening_m)?;
         policy.cem = args.cem.then(CemParams::default);

@@ -191,34 +191,29 @@ fn the_checker_catches_an_upward_arrow() {
     assert_eq!(violations.len(), 2, "{violations:?}");
 }
 
+/// The checker catches the arrows the layers exist to forbid: the planner reaching the dataset
+/// generators (the root package) or the renderer; the runtime reaching the root package (the
+/// dataset generators, the evaluation, the CLIs) or a command-line parser.
 #[test]
-fn the_planner_cannot_reach_the_dataset_generators_or_the_renderer() {
-    let dir = tempfile::tempdir().unwrap();
-    let manifest = dir.path().join("Cargo.toml");
-    std::fs::write(
-        &manifest,
-        "[package]\nname='x'\n[dependencies]\nmvgrasp = { path = '..' }\nmvgrasp-render = { path = '..' }\n",
-    )
-    .unwrap();
-    let rule = RULES.iter().find(|r| r.0 == "mvgrasp-planner").unwrap();
-    let violations = check(rule.0, &dependencies(&manifest), rule.2, rule.3);
-    assert_eq!(violations.len(), 2, "{violations:?}");
-}
-
-#[test]
-fn the_runtime_cannot_reach_the_dataset_generators_the_evaluation_or_the_cli() {
-    // They live in the root package, above the runtime crate; a command-line parser or a
-    // progress bar in the runtime would mean a tool's code moved in.
-    let dir = tempfile::tempdir().unwrap();
-    let manifest = dir.path().join("Cargo.toml");
-    std::fs::write(
-        &manifest,
-        "[package]\nname='x'\n[dependencies]\nmvgrasp = { path = '..' }\nclap = '4'\n",
-    )
-    .unwrap();
-    let rule = RULES.iter().find(|r| r.0 == "mvgrasp-runtime").unwrap();
-    let violations = check(rule.0, &dependencies(&manifest), rule.2, rule.3);
-    assert_eq!(violations.len(), 2, "{violations:?}");
+fn the_planner_and_the_runtime_cannot_reach_above_them() {
+    for (crate_name, dependencies_toml) in [
+        (
+            "mvgrasp-planner",
+            "mvgrasp = { path = '..' }\nmvgrasp-render = { path = '..' }\n",
+        ),
+        ("mvgrasp-runtime", "mvgrasp = { path = '..' }\nclap = '4'\n"),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let manifest = dir.path().join("Cargo.toml");
+        std::fs::write(
+            &manifest,
+            format!("[package]\nname='x'\n[dependencies]\n{dependencies_toml}"),
+        )
+        .unwrap();
+        let rule = RULES.iter().find(|r| r.0 == crate_name).unwrap();
+        let violations = check(rule.0, &dependencies(&manifest), rule.2, rule.3);
+        assert_eq!(violations.len(), 2, "{crate_name}: {violations:?}");
+    }
 }
 
 /// The modules each module of a crate's `src/` names (`crate::NAME`), in its code before its

@@ -64,6 +64,24 @@ pub struct PredictedDepth {
     pub confidence: Option<Vec<f32>>,
 }
 
+impl PredictedDepth {
+    /// A method's depth and per-pixel confidence.
+    pub fn with_confidence(depth_m: Vec<f32>, confidence: Vec<f32>) -> Self {
+        Self {
+            depth_m,
+            confidence: Some(confidence),
+        }
+    }
+
+    /// A method's depth, without a confidence.
+    pub fn depth_only(depth_m: Vec<f32>) -> Self {
+        Self {
+            depth_m,
+            confidence: None,
+        }
+    }
+}
+
 /// A way to predict depth from posed RGB views.
 pub trait DepthFromRgb: Send + Sync {
     /// Its name in summaries (the shipped ones: `plan --depth-from`'s names).

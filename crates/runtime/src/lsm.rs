@@ -170,10 +170,7 @@ impl DepthFromRgb for Lsm {
     fn predict(&self, views: &[RgbView]) -> Result<Vec<PredictedDepth>> {
         Ok(lsm_depths(self, views)?
             .into_iter()
-            .map(|depth_m| PredictedDepth {
-                depth_m,
-                confidence: None,
-            })
+            .map(PredictedDepth::depth_only)
             .collect())
     }
 }

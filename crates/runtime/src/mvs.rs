@@ -154,10 +154,7 @@ impl DepthFromRgb for MvsDepth {
     fn predict(&self, views: &[RgbView]) -> Result<Vec<PredictedDepth>> {
         Ok(mvs_depths(&self.net, views, self.min_confidence)?
             .into_iter()
-            .map(|view| PredictedDepth {
-                depth_m: view.depth_m,
-                confidence: Some(view.confidence),
-            })
+            .map(|view| PredictedDepth::with_confidence(view.depth_m, view.confidence))
             .collect())
     }
 }

@@ -278,10 +278,7 @@ impl DepthFromRgb for RefinedSweep {
         Ok(self
             .depths(views)?
             .into_iter()
-            .map(|view| PredictedDepth {
-                depth_m: view.depth_m,
-                confidence: Some(view.confidence),
-            })
+            .map(|view| PredictedDepth::with_confidence(view.depth_m, view.confidence))
             .collect())
     }
 }

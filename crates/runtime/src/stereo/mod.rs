@@ -59,23 +59,6 @@ mod band;
 mod consistency;
 mod project;
 
-impl DepthFromRgb for SweepParams {
-    fn name(&self) -> &str {
-        DepthFrom::Baseline.name()
-    }
-
-    /// [`sweep_depths`] with these settings; the sweep gives no confidence.
-    fn predict(&self, views: &[RgbView]) -> Result<Vec<PredictedDepth>> {
-        Ok(sweep_depths(views, self)?
-            .into_iter()
-            .map(|swept| PredictedDepth {
-                depth_m: swept.depth_m,
-                confidence: None,
-            })
-            .collect())
-    }
-}
-
 #[cfg(test)]
 mod reference;
 mod sweep;
@@ -205,6 +188,20 @@ pub fn sweep_depths(views: &[RgbView], params: &SweepParams) -> Result<Vec<Swept
         }
     }
     Ok(swept)
+}
+
+impl DepthFromRgb for SweepParams {
+    fn name(&self) -> &str {
+        DepthFrom::Baseline.name()
+    }
+
+    /// [`sweep_depths`] with these settings; the sweep gives no confidence.
+    fn predict(&self, views: &[RgbView]) -> Result<Vec<PredictedDepth>> {
+        Ok(sweep_depths(views, self)?
+            .into_iter()
+            .map(|swept| PredictedDepth::depth_only(swept.depth_m))
+            .collect())
+    }
 }
 
 /// The image under a [1 2 1] x [1 2 1] / 16 binomial filter (the borders clamped): colours
