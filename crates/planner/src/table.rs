@@ -22,10 +22,19 @@ pub struct TableFitParams {
     pub inlier_distance_m: f32,
     /// Every this many pixels along rows and columns are fitted.
     pub stride_px: u32,
+    /// What a point more than `inlier_distance_m` under a hypothesis costs it, in inliers.
+    /// Nothing lies under a support: the top of a box in a bin has the bin's floor under it
+    /// and loses to the floor though it has more inliers. Less than one, because a table
+    /// seen past its edge has the floor under part of the image.
+    pub below_cost: f32,
     /// Points higher than this above the table are the object's, metres.
     pub object_min_height_m: f32,
     /// Regions of fewer pixels than this share of the image are noise, not objects.
     pub object_min_share: f32,
+    /// Neighbouring pixels whose depths differ by less than this lie on one smooth surface,
+    /// metres: what is joined that way to something the image's border cuts (a bin's wall,
+    /// a floor that curves up into it) is not an object.
+    pub smooth_step_m: f32,
     /// Seeds the hypotheses.
     pub seed: u64,
 }
@@ -36,8 +45,10 @@ impl Default for TableFitParams {
             iterations: 300,
             inlier_distance_m: 0.004,
             stride_px: 4,
+            below_cost: 0.5,
             object_min_height_m: 0.005,
             object_min_share: 0.0005,
+            smooth_step_m: 0.003,
             seed: 0,
         }
     }
@@ -118,8 +129,9 @@ impl TableFit {
 }
 
 /// Fits the table to `depth`'s points (every `stride_px`-th, leaving out `exclude`'s pixels,
-/// e.g. the object's mask): the plane with the most inliers over random three-point
-/// hypotheses, refined by least squares on its inliers; deterministic from `params.seed`.
+/// e.g. the object's mask): over random three-point hypotheses, the plane with the most
+/// inliers less [`TableFitParams::below_cost`] for each point under it (a support has nothing
+/// under it), refined by least squares on its inliers; deterministic from `params.seed`.
 ///
 /// # Errors
 /// [`PlannerError::Table`] with fewer than 3 usable points, or no plane through them.
@@ -147,25 +159,37 @@ pub fn fit_table(
         )));
     }
     let threshold = params.inlier_distance_m;
-    let count = |n: Vec3, h: f32| {
-        points
-            .iter()
-            .filter(|p| (n.dot(**p) + h).abs() < threshold)
-            .count()
+    // Inliers less the cost of the points under the plane (the side away from the camera).
+    let score = |n: Vec3, h: f32| {
+        let (mut inliers, mut below) = (0usize, 0usize);
+        for p in &points {
+            let r = n.dot(*p) + h;
+            if r.abs() < threshold {
+                inliers += 1;
+            } else if r < 0.0 {
+                below += 1;
+            }
+        }
+        inliers as f32 - params.below_cost * below as f32
     };
     let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
-    let mut best: Option<(usize, Vec3, f32)> = None;
+    let mut best: Option<(f32, Vec3, f32)> = None;
     for _ in 0..params.iterations {
         let [a, b, c] = [0; 3].map(|_| points[rng.random_range(0..points.len())]);
         let n = (b - a).cross(c - a);
         if n.length() < 1e-9 {
             continue;
         }
-        let n = n.normalize();
-        let h = -n.dot(a);
-        let inliers = count(n, h);
-        if best.is_none_or(|(most, ..)| inliers > most) {
-            best = Some((inliers, n, h));
+        let mut n = n.normalize();
+        let mut h = -n.dot(a);
+        // Up is towards the camera (at the origin), so that "under" is away from it.
+        if h < 0.0 {
+            n = -n;
+            h = -h;
+        }
+        let s = score(n, h);
+        if best.is_none_or(|(most, ..)| s > most) {
+            best = Some((s, n, h));
         }
     }
     let Some((_, n, h)) = best else {
@@ -216,9 +240,12 @@ pub fn fit_table(
 }
 
 /// The objects on the table: pixels higher than `params.object_min_height_m` above it, in
-/// connected regions (4-neighbours) that do not touch the image's border (something only
-/// partly in view: the robot, a bin wall) and hold at least `params.object_min_share` of the
-/// image.
+/// connected regions (4-neighbours) that hold at least `params.object_min_share` of the image.
+/// A region the image's border cuts (a robot, a bin's wall) is not an object, nor is what is
+/// joined to the border or to the table by a smooth surface (neighbours within
+/// `params.smooth_step_m` in depth: a bin's floor that curves up into its walls), nor what
+/// lies behind such a surface across a depth edge (under a robot's arm); what is left of such
+/// a region, in front of it across depth edges (the objects in a bin, from above), is.
 ///
 /// # Errors
 /// [`PlannerError::Table`] when no region qualifies.
@@ -229,50 +256,63 @@ pub fn objects_above(
 ) -> Result<Mask> {
     let k = depth.intrinsics();
     let (w, h) = (depth.width() as usize, depth.height() as usize);
+    let d = depth.as_slice();
     let above: Vec<bool> = (0..w * h)
         .map(|i| {
             let (u, v) = (i % w, i / w);
-            let d = depth.as_slice()[i];
-            d > 0.0
-                && table.height_of(k.unproject(u as f32, v as f32, d)) > params.object_min_height_m
+            d[i] > 0.0
+                && table.height_of(k.unproject(u as f32, v as f32, d[i]))
+                    > params.object_min_height_m
         })
         .collect();
+    let on_border = |i: usize| {
+        let (u, v) = (i % w, i / w);
+        u == 0 || v == 0 || u + 1 == w || v + 1 == h
+    };
     let min_pixels = (params.object_min_share * (w * h) as f32).ceil() as usize;
     let mut label = vec![false; w * h];
-    let mut seen = vec![false; w * h];
-    let mut stack = Vec::new();
-    let mut region = Vec::new();
     let mut kept = 0;
-    for start in 0..w * h {
-        if !above[start] || seen[start] {
+    let mut keep = |region: &[usize], label: &mut [bool]| {
+        if region.len() >= min_pixels {
+            kept += 1;
+            for &i in region {
+                label[i] = true;
+            }
+        }
+    };
+    for region in components(&above, w, h) {
+        if !region.iter().any(|&i| on_border(i)) {
+            keep(&region, &mut label);
             continue;
         }
-        seen[start] = true;
-        stack.push(start);
-        region.clear();
-        let mut touches_border = false;
+        // The region less what a smooth surface joins to the border or the table.
+        let mut rest = vec![false; w * h];
+        for &i in &region {
+            rest[i] = true;
+        }
+        let smooth = |i: usize, j: usize| (d[i] - d[j]).abs() < params.smooth_step_m;
+        let mut stack: Vec<usize> = region
+            .iter()
+            .copied()
+            .filter(|&i| {
+                on_border(i) || neighbours(i, w, h).any(|j| !above[j] && d[j] > 0.0 && smooth(i, j))
+            })
+            .collect();
+        for &i in &stack {
+            rest[i] = false;
+        }
         while let Some(i) = stack.pop() {
-            region.push(i);
-            let (u, v) = (i % w, i / w);
-            touches_border |= u == 0 || v == 0 || u + 1 == w || v + 1 == h;
-            let neighbours = [
-                (u > 0).then(|| i - 1),
-                (u + 1 < w).then(|| i + 1),
-                (v > 0).then(|| i - w),
-                (v + 1 < h).then(|| i + w),
-            ];
-            for j in neighbours.into_iter().flatten() {
-                if above[j] && !seen[j] {
-                    seen[j] = true;
+            for j in neighbours(i, w, h) {
+                // Across a depth edge only to what lies behind: under a robot's arm, not an
+                // object in front of a bin's wall.
+                if rest[j] && (smooth(i, j) || d[j] > d[i]) {
+                    rest[j] = false;
                     stack.push(j);
                 }
             }
         }
-        if !touches_border && region.len() >= min_pixels {
-            kept += 1;
-            for &i in &region {
-                label[i] = true;
-            }
+        for part in components(&rest, w, h) {
+            keep(&part, &mut label);
         }
     }
     if kept == 0 {
@@ -283,6 +323,45 @@ pub fn objects_above(
         )));
     }
     Mask::new(depth.width(), depth.height(), label)
+}
+
+/// The 4-neighbours of pixel `i` of a `w` x `h` image.
+fn neighbours(i: usize, w: usize, h: usize) -> impl Iterator<Item = usize> {
+    let (u, v) = (i % w, i / w);
+    [
+        (u > 0).then(|| i - 1),
+        (u + 1 < w).then(|| i + 1),
+        (v > 0).then(|| i - w),
+        (v + 1 < h).then(|| i + w),
+    ]
+    .into_iter()
+    .flatten()
+}
+
+/// The connected regions (4-neighbours) of `mask`'s set pixels, each in the order found.
+fn components(mask: &[bool], w: usize, h: usize) -> Vec<Vec<usize>> {
+    let mut seen = vec![false; w * h];
+    let mut regions = Vec::new();
+    let mut stack = Vec::new();
+    for start in 0..w * h {
+        if !mask[start] || seen[start] {
+            continue;
+        }
+        seen[start] = true;
+        stack.push(start);
+        let mut region = Vec::new();
+        while let Some(i) = stack.pop() {
+            region.push(i);
+            for j in neighbours(i, w, h) {
+                if mask[j] && !seen[j] {
+                    seen[j] = true;
+                    stack.push(j);
+                }
+            }
+        }
+        regions.push(region);
+    }
+    regions
 }
 
 #[cfg(test)]
@@ -395,6 +474,62 @@ mod tests {
         let edge = DepthImage::new(k, shifted).unwrap();
         let fit = fit_table(&edge, None, &TableFitParams::default()).unwrap();
         assert!(objects_above(&edge, &fit, &TableFitParams::default()).is_err());
+    }
+
+    /// A bin seen from 0.8 m straight above: its floor at 0.8 m rising smoothly into a wall
+    /// along the image's left edge (a 12 cm ramp, 3 cm high where the border cuts it), a flat
+    /// box 4 cm tall, 50 x 40 cm, covering more of the image than the floor does, and a small
+    /// box 3 cm tall standing against the foot of the ramp.
+    fn bin_scene() -> DepthImage {
+        let k = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
+        let depth = (0..k.width * k.height)
+            .map(|i| {
+                let (u, v) = ((i % k.width) as f32, (i / k.width) as f32);
+                let (x, y) = ((u - k.cx) * 0.8 / k.fx, (v - k.cy) * 0.8 / k.fy);
+                let left = -k.cx * 0.8 / k.fx;
+                let ramp = (0.12 - (x - left)).max(0.0) / 0.12 * 0.03;
+                let big = (x - (left + 0.41)).abs() < 0.25 && y.abs() < 0.2;
+                let small = (x - (left + 0.13)).abs() < 0.015 && y.abs() < 0.02;
+                let height = if big {
+                    0.04
+                } else if small {
+                    0.03
+                } else {
+                    ramp
+                };
+                // Straight down: depth is 0.8 m less the height (near enough for the test).
+                0.8 - height
+            })
+            .collect();
+        DepthImage::new(k, depth).unwrap()
+    }
+
+    #[test]
+    fn in_a_bin_the_floor_is_the_table_and_the_objects_are_found_against_its_wall() {
+        let depth = bin_scene();
+        let params = TableFitParams::default();
+        let fit = fit_table(&depth, None, &params).unwrap();
+        // The wide box's top has more inliers than the floor, but the floor is under it.
+        assert!((fit.camera_height_m - 0.8).abs() < 2e-3, "{fit:?}");
+        let without_cost = TableFitParams {
+            below_cost: 0.0,
+            ..params.clone()
+        };
+        let top = fit_table(&depth, None, &without_cost).unwrap();
+        assert!((top.camera_height_m - 0.76).abs() < 2e-3, "{top:?}");
+        // The ramp is cut by the border and joins the small box: the box stays an object,
+        // the ramp does not.
+        let mask = objects_above(&depth, &fit, &params).unwrap();
+        let k = depth.intrinsics();
+        let at_m = |x: f32, y: f32| {
+            let (u, v) = (x * k.fx / 0.8 + k.cx, y * k.fy / 0.8 + k.cy);
+            mask.at(u as i64, v as i64)
+        };
+        let left = -k.cx * 0.8 / k.fx;
+        assert!(at_m(left + 0.41, 0.0), "the wide box");
+        assert!(at_m(left + 0.13, 0.0), "the small box against the ramp");
+        assert!(!at_m(left + 0.05, 0.0), "the ramp");
+        assert!(!at_m(left + 0.05, 0.15), "the ramp");
     }
 
     #[test]
