@@ -371,3 +371,78 @@ fn kill_and_resume_and_any_thread_count_give_the_same_bytes() {
     );
     assert_eq!(shard_bytes(&killed), reference, "resumed run differs");
 }
+
+/// Clutter changes what the crops show and which grasps are free, nothing else: the same
+/// grasps, qualities and cameras as the object alone, every grasp that clutter leaves free is
+/// free alone, and some crop shows a neighbour.
+#[test]
+fn clutter_adds_neighbours_to_the_crops_and_to_the_hand_check_only() {
+    let Some(renderer) = renderer() else { return };
+    let objects = sources(&[Category::Box, Category::Can, Category::Mug]);
+    let alone = GraspDatasetConfig {
+        physics_fraction: 0.0,
+        ..small_config()
+    };
+    let cluttered = GraspDatasetConfig {
+        clutter: Some(mvgrasp::grasp_dataset::ClutterParams {
+            neighbours: [2, 2],
+            spread_m: 0.08,
+            ..Default::default()
+        }),
+        ..alone.clone()
+    };
+    let read = |config: &GraspDatasetConfig| {
+        let dir = tempfile::tempdir().unwrap();
+        generate(&renderer, &objects, config, dir.path(), false).unwrap();
+        (0..objects.len())
+            .map(|i| std::fs::read(dir.path().join(format!("shard_{i:05}.safetensors"))).unwrap())
+            .collect::<Vec<_>>()
+    };
+    let (alone_bytes, clutter_bytes) = (read(&alone), read(&cluttered));
+    assert_eq!(
+        clutter_bytes,
+        read(&cluttered),
+        "the same seed, the same bytes"
+    );
+    let (mut differing_crops, mut lost_freedom) = (0, 0);
+    for (a, c) in alone_bytes.iter().zip(&clutter_bytes) {
+        let (a, c) = (
+            SafeTensors::deserialize(a).unwrap(),
+            SafeTensors::deserialize(c).unwrap(),
+        );
+        for column in [
+            "robust_epsilon",
+            "object_from_gripper",
+            "world_from_camera",
+            "grasp",
+        ] {
+            assert_eq!(
+                a.tensor(column).unwrap().data(),
+                c.tensor(column).unwrap().data(),
+                "{column}"
+            );
+        }
+        let free = |t: &SafeTensors| t.tensor("collision_free").unwrap().data().to_vec();
+        for (fa, fc) in free(&a).iter().zip(free(&c)) {
+            assert!(fc <= *fa, "free in clutter but not alone");
+            lost_freedom += usize::from(fc < *fa);
+        }
+        let (crops_a, crops_c) = (f32s(&a, "depth_crops"), f32s(&c, "depth_crops"));
+        let side = 32 * 32;
+        differing_crops += crops_a
+            .chunks(side)
+            .zip(crops_c.chunks(side))
+            .filter(|(x, y)| x != y)
+            .count();
+    }
+    assert!(differing_crops > 0, "no crop shows a neighbour");
+    assert!(lost_freedom > 0, "no neighbour is in any hand's way");
+
+    let physics = GraspDatasetConfig {
+        physics_fraction: 0.5,
+        ..cluttered
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let err = generate(&renderer, &objects, &physics, dir.path(), false).unwrap_err();
+    assert!(err.to_string().contains("physics_fraction"), "{err}");
+}

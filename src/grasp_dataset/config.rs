@@ -57,6 +57,10 @@ pub struct GraspDatasetConfig {
     /// How the physics trials shape each object (the hull or VHACD's parts by default; a shell
     /// of slabs along the surface with `shell = true`).
     pub physics_shape: ShapeParams,
+    /// Neighbours packed around each object ([`super::clutter`]); none by default, the object
+    /// alone on the table. Not with physics labels: the trial does not simulate neighbours.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub clutter: Option<super::clutter::ClutterParams>,
 }
 
 impl Default for GraspDatasetConfig {
@@ -81,6 +85,7 @@ impl Default for GraspDatasetConfig {
             quality: labels.quality,
             physics: labels.physics,
             physics_shape: labels.physics_shape,
+            clutter: None,
         }
     }
 }
@@ -218,6 +223,16 @@ impl GraspDatasetConfig {
                 self.physics_fraction,
                 "must be in [0, 1]",
             );
+        }
+        if let Some(clutter) = &self.clutter {
+            clutter.validate()?;
+            if self.physics_fraction > 0.0 {
+                return bad(
+                    "physics_fraction",
+                    self.physics_fraction,
+                    "must be 0 with clutter: the physics trial does not simulate the neighbours",
+                );
+            }
         }
         let c = self.crop;
         if c.size_px == 0 || !c.size_px.is_multiple_of(2) || c.window_px < c.size_px {

@@ -25,12 +25,14 @@
 //! ([`generate_shard`] makes one shard alone).
 
 pub mod cameras;
+pub mod clutter;
 pub mod config;
 pub mod noise;
 pub(crate) mod object;
 pub mod preview;
 pub mod shard;
 
+pub use clutter::ClutterParams;
 pub use config::{
     CameraDistribution, CropParams, GraspDatasetConfig, MultiViewCameras, NoiseParams,
     TopDownCameras,
@@ -41,6 +43,8 @@ use std::path::Path;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use mvgrasp_render::Renderer;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -48,6 +52,9 @@ use crate::dataset::{ObjectSource, name_hash, splitmix};
 use crate::error::{Error, Result};
 use object::{Resolved, object_datapoints};
 use shard::{finished_shard, write_atomically, write_shard};
+
+/// Mixed into an object's seed to draw its neighbours.
+const CLUTTER_SEED: u64 = 0x636c_7574_7465_7200;
 
 /// The manifest's format tag.
 pub const FORMAT: &str = "mvgrasp-grasp-dataset/1";
@@ -177,6 +184,30 @@ impl DatasetPlan {
         Ok(Some(record))
     }
 
+    /// The neighbours that clutter object `index` (seeded with `object_seed`): as many of the
+    /// other objects as the clutter config may place, drawn without repeats; one that cannot
+    /// be loaded or has no stable pose is left out. None without clutter.
+    fn neighbours_of(&self, index: usize, object_seed: u64) -> Vec<clutter::Neighbour> {
+        let Some(params) = &self.config.clutter else {
+            return Vec::new();
+        };
+        let others: Vec<usize> = (0..self.objects.len()).filter(|&i| i != index).collect();
+        let wanted = params.neighbours[1].min(others.len());
+        let mut rng = ChaCha8Rng::seed_from_u64(splitmix(object_seed ^ CLUTTER_SEED));
+        let mut order = others;
+        for i in 0..wanted {
+            let j = rng.random_range(i..order.len());
+            order.swap(i, j);
+        }
+        order[..wanted]
+            .iter()
+            .filter_map(|&i| {
+                let mesh = self.objects[i].1.load().ok()?;
+                clutter::Neighbour::new(mesh).ok()
+            })
+            .collect()
+    }
+
     /// How many shards the objects make.
     pub fn num_shards(&self) -> usize {
         self.objects.len().div_ceil(self.config.objects_per_shard)
@@ -293,6 +324,7 @@ fn make_shard(
         .par_iter()
         .map(|(object, source)| {
             let object_seed = splitmix(plan.config.seed ^ name_hash(&object.name));
+            let neighbours = plan.neighbours_of(object.id as usize, object_seed);
             let points = source.load().and_then(|mesh| {
                 object_datapoints(
                     renderer,
@@ -301,6 +333,7 @@ fn make_shard(
                     object_seed,
                     &plan.config,
                     &plan.resolved,
+                    &neighbours,
                 )
             });
             (object.id, points)

@@ -16,6 +16,7 @@ use rayon::prelude::*;
 use mvgrasp_planner::{crop_depth, theta_rad};
 
 use super::cameras::sample_camera;
+use super::clutter::{Neighbour, hits_a_neighbour, place, scene_mesh};
 use super::config::GraspDatasetConfig;
 use super::noise::add_depth_noise;
 use super::shard::Datapoint;
@@ -41,6 +42,7 @@ const CAMERA: u64 = 3;
 const NOISE: u64 = 4;
 const PHYSICS: u64 = 5;
 const PHYSICS_NOISE: u64 = 6;
+const CLUTTER: u64 = 7;
 
 /// The seed of the robust quality of axis `grasp` in pose `pose` (what `quality_seed` records).
 pub(crate) fn quality_seed(object_seed: u64, pose: usize, grasp: usize) -> u64 {
@@ -48,7 +50,8 @@ pub(crate) fn quality_seed(object_seed: u64, pose: usize, grasp: usize) -> u64 {
 }
 
 /// All datapoints of `mesh` (object `object_id`, seeded with `object_seed`), in the order
-/// stable pose, view, axis. An object with no stable pose or no antipodal axis gives none.
+/// stable pose, view, axis, with `neighbours` packed around it in each pose when the config
+/// has clutter. An object with no stable pose or no antipodal axis gives none.
 pub(crate) fn object_datapoints(
     renderer: &Renderer,
     mesh: &TriangleMesh,
@@ -56,6 +59,7 @@ pub(crate) fn object_datapoints(
     object_seed: u64,
     config: &GraspDatasetConfig,
     resolved: &Resolved,
+    neighbours: &[Neighbour],
 ) -> Result<Vec<Datapoint>> {
     let poses: Vec<_> = RestingPoses::of(mesh)?
         .iter()
@@ -105,7 +109,25 @@ pub(crate) fn object_datapoints(
                 sample_camera(&config.cameras, resolved.intrinsics, target, &mut rng)
             })
             .collect::<Result<Vec<_>>>()?;
-        let frames_rendered = render_depths(renderer, mesh, &table_from_object, &cameras)?;
+        let placed = match &config.clutter {
+            Some(params) => {
+                let seed = seed_of(object_seed, CLUTTER, pose_index as u64, 0);
+                place(
+                    mesh,
+                    &table_from_object,
+                    neighbours,
+                    params,
+                    &mut ChaCha8Rng::seed_from_u64(seed),
+                )
+            }
+            None => Vec::new(),
+        };
+        let frames_rendered = if placed.is_empty() {
+            render_depths(renderer, mesh, &table_from_object, &cameras)?
+        } else {
+            let scene = scene_mesh(mesh, &table_from_object, neighbours, &placed)?;
+            render_depths(renderer, &scene, &Pose3::IDENTITY, &cameras)?
+        };
         let mut candidates = Vec::new();
         for (view, (camera, mut depth)) in cameras.iter().zip(frames_rendered).enumerate() {
             let (w, h) = (camera.intrinsics.width, camera.intrinsics.height);
@@ -143,7 +165,15 @@ pub(crate) fn object_datapoints(
                 );
                 // The one label ([`GraspLabel`]): the axis's robust quality, scored once for
                 // every view, and this view's approach.
-                let label = GraspLabel::of(*quality, collision.is_free(), &config.quality);
+                let free = collision.is_free()
+                    && !hits_a_neighbour(
+                        &resolved.gripper,
+                        &grasp.world_from_gripper,
+                        grasp.width_m,
+                        neighbours,
+                        &placed,
+                    );
+                let label = GraspLabel::of(*quality, free, &config.quality);
                 candidates.push(Datapoint {
                     crop: crop_depth(&depth, image.center_px, image.angle_rad, &config.crop),
                     grasp_depth_m: image.depth_m,
