@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use crate::cem::{self, CemParams, Mixture};
 use crate::contract::InputContract;
 use crate::crop::crop_depth;
-use crate::depth_image::View;
+use crate::depth_image::{DepthImage, View};
 use crate::error::{PlannerError, Result};
 use crate::fusion::Fusion;
 use crate::plan::Plan;
@@ -132,10 +132,11 @@ impl GqcnnPolicy {
             &sampler,
             seed,
         );
-        let quality = self.score(view, &grasps)?;
+        let filled = view.depth.with_holes_filled();
+        let quality = self.score_on(view, &filled, &grasps)?;
         let mut scored: Vec<(ImageGrasp, f32)> = grasps.into_iter().zip(quality).collect();
         if let Some(cem) = &self.cem {
-            self.cross_entropy(view, &mut scored, cem, splitmix(seed ^ CEM_SALT))?;
+            self.cross_entropy(view, &filled, &mut scored, cem, splitmix(seed ^ CEM_SALT))?;
         }
         let theta = view.theta_rad();
         Ok(scored
@@ -160,6 +161,7 @@ impl GqcnnPolicy {
     fn cross_entropy(
         &self,
         view: &View,
+        filled: &DepthImage,
         scored: &mut Vec<(ImageGrasp, f32)>,
         cem: &CemParams,
         seed: u64,
@@ -203,7 +205,7 @@ impl GqcnnPolicy {
                     drawn.push(g);
                 }
             }
-            let quality = self.score(view, &drawn)?;
+            let quality = self.score_on(view, filled, &drawn)?;
             round = drawn.into_iter().zip(quality).collect();
             scored.extend(round.iter().copied());
         }
@@ -211,13 +213,25 @@ impl GqcnnPolicy {
     }
 
     /// The network's probability that each grasp, in `view`'s image, is robust: its crop cut to
-    /// the contract for the view's camera, with the grasp's depth (and the view's theta for a
+    /// the contract for the view's camera from the image with its holes filled
+    /// ([`DepthImage::with_holes_filled`]), with the grasp's depth (and the view's theta for a
     /// multi-view network) as the pose input.
     ///
     /// # Errors
     /// [`PlannerError::Camera`] for a view whose camera the network cannot be fed, or a network
     /// error.
     pub fn score(&self, view: &View, grasps: &[ImageGrasp]) -> Result<Vec<f32>> {
+        self.score_on(view, &view.depth.with_holes_filled(), grasps)
+    }
+
+    /// [`GqcnnPolicy::score`] with the crops cut from `filled`, `view`'s depth with its holes
+    /// filled.
+    fn score_on(
+        &self,
+        view: &View,
+        filled: &DepthImage,
+        grasps: &[ImageGrasp],
+    ) -> Result<Vec<f32>> {
         let crop = self.contract.crop_for(&view.camera.intrinsics)?;
         let theta = view.theta_rad();
         let pose_inputs = self.net.architecture().pose_inputs;
@@ -240,7 +254,7 @@ impl GqcnnPolicy {
             // The crops in parallel (in order: the same bytes whatever the thread count).
             crops.par_extend(
                 axes.par_iter()
-                    .flat_map_iter(|g| crop_depth(&view.depth, g.center_px, g.angle_rad, &crop)),
+                    .flat_map_iter(|g| crop_depth(filled, g.center_px, g.angle_rad, &crop)),
             );
             for g in chunk {
                 poses.push(g.depth_m);
