@@ -102,10 +102,7 @@ fn a_grasp_on_each_real_single_object_image_with_and_without_its_mask() {
     };
     let images = root.join("examples/single_object/primesense");
     let intrinsics = root.join("calib/primesense/primesense.intr");
-    let gripper = PlanParams::default().labels.gripper;
-    let policy = Planner::from(
-        GqcnnPolicy::new(models::GQCNN_TOPDOWN.load().unwrap(), gripper.max_opening_m).unwrap(),
-    );
+    let (gripper, policy) = topdown_planner();
     let params = SensorPlanParams::default();
     for i in 0..10 {
         let mask = images.join(format!("segmask_{i}.png"));
@@ -140,6 +137,15 @@ fn a_grasp_on_each_real_single_object_image_with_and_without_its_mask() {
     }
 }
 
+/// The default gripper and the shipped top-down GQ-CNN.
+fn topdown_planner() -> (mvgrasp::grasp::Gripper, Planner) {
+    let gripper = PlanParams::default().labels.gripper;
+    let policy = Planner::from(
+        GqcnnPolicy::new(models::GQCNN_TOPDOWN.load().unwrap(), gripper.max_opening_m).unwrap(),
+    );
+    (gripper, policy)
+}
+
 /// gqcnn's clutter images: (folder, images, intrinsics, camera pose).
 const CLUTTER_SETS: [(&str, usize, &str, &str); 3] = [
     (
@@ -170,10 +176,7 @@ fn a_grasp_rated_half_or_more_on_an_object_in_each_real_clutter_image_without_a_
     let Some(root) = shared_data("real_depth/gqcnn/data") else {
         return;
     };
-    let gripper = PlanParams::default().labels.gripper;
-    let policy = Planner::from(
-        GqcnnPolicy::new(models::GQCNN_TOPDOWN.load().unwrap(), gripper.max_opening_m).unwrap(),
-    );
+    let (gripper, policy) = topdown_planner();
     let params = SensorPlanParams::default();
     let mut failures = Vec::new();
     for (folder, count, intrinsics, pose) in CLUTTER_SETS {
@@ -211,10 +214,7 @@ fn a_grasp_on_some_object_in_each_real_clutter_image_with_and_without_the_camera
     let Some(root) = shared_data("real_depth/gqcnn/data") else {
         return;
     };
-    let gripper = PlanParams::default().labels.gripper;
-    let policy = Planner::from(
-        GqcnnPolicy::new(models::GQCNN_TOPDOWN.load().unwrap(), gripper.max_opening_m).unwrap(),
-    );
+    let (gripper, policy) = topdown_planner();
     let params = SensorPlanParams::default();
     for (folder, count, intrinsics, pose) in CLUTTER_SETS {
         for i in 0..count {
@@ -599,10 +599,7 @@ fn a_view_in_memory_plans_as_its_files_do() {
     let path = dir.path().join("depth.png");
     write_depth_png(&path, k.width, k.height, &depth);
     let intrinsics = write_intrinsics(dir.path(), "camera.json", &k);
-    let gripper = PlanParams::default().labels.gripper;
-    let policy = Planner::from(
-        GqcnnPolicy::new(models::GQCNN_TOPDOWN.load().unwrap(), gripper.max_opening_m).unwrap(),
-    );
+    let (gripper, policy) = topdown_planner();
     let params = SensorPlanParams::default();
     let files = SensorFiles {
         depth: path,
