@@ -5,6 +5,7 @@
 #[path = "../../../tests/support/shared_data.rs"]
 mod shared_data;
 
+mod clutter_trial;
 mod gripper_urdf;
 mod mechanics;
 mod physics;

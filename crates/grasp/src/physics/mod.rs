@@ -89,4 +89,4 @@ pub use params::{PhysicsNoise, PhysicsParams};
 pub use robust::{StageCounts, SuccessEstimate, success_probability};
 pub use scene::{PAD_BALL_RADIUS_M, PAD_BALLS, pad_ring_radius};
 pub use shell::{ShapeError, ShapeParams};
-pub use trial::{FailureStage, PhysicsOutcome, simulate_grasp};
+pub use trial::{FailureStage, PhysicsOutcome, simulate_grasp, simulate_grasp_among};

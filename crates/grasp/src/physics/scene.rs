@@ -49,6 +49,9 @@ pub(crate) struct Scene {
     object_shape: SharedShape,
     /// The object's true surface, in its body frame: for the approach.
     object_surface: Arc<TriMesh>,
+    /// The other objects on the table ([`Scene::add_neighbour`]), each body with its true
+    /// surface in its body frame.
+    neighbours: Vec<(RigidBodyHandle, Arc<TriMesh>)>,
     /// The pads' twist friction, once the hand is in.
     pads: Vec<PadTwist>,
 }
@@ -220,63 +223,41 @@ impl Scene {
                 .collision_groups(groups(TABLE_GROUP, Group::ALL)),
             Some(table_body),
         );
-        let object_body = world.insert_body(
-            RigidBodyBuilder::dynamic()
-                .pose(*table_from_object)
-                .can_sleep(false),
-        );
-        // One collider: the parts turned to stand as they rest on the table, so that the
-        // compound's frame is the table's. rapier finds the parts near another shape by that
-        // shape's box in the compound's frame: in the mesh's own frame the box of a table
-        // tilted under a lying object spans every part, and hundreds of parts then cost
-        // seconds a trial; axis-aligned it holds the parts near the table only.
-        let turn = Pose3::from_rotation(table_from_object.rotation);
-        let parts: Vec<(Pose3, SharedShape)> = object
-            .parts()
-            .into_iter()
-            .map(|(pose, part)| (turn * pose, part))
-            .collect();
-        let shape = match parts.as_slice() {
-            [(pose, only)] if *pose == Pose3::IDENTITY => only.clone(),
-            _ => SharedShape::compound(parts),
-        };
-        let collider_in_body = turn.inverse();
-        world.colliders.insert_with_parent(
-            // Friction 1 combined by product: a pair's coefficient is the other collider's, so
-            // the table's against the table and the pads' against the hand.
-            ColliderBuilder::new(shape)
-                .position(collider_in_body)
-                // A collider's mass properties are in its own frame.
-                .mass_properties(
-                    object
-                        .mass_properties(params.object_density_kg_m3)
-                        .transform_by(&turn),
-                )
-                .friction(1.0)
-                .friction_combine_rule(CoefficientCombineRule::Multiply)
-                .collision_groups(groups(OBJECT_GROUP, Group::ALL)),
-            object_body,
-            &mut world.bodies,
-        );
-        if params.grip_true_surface {
-            world.colliders.insert_with_parent(
-                ColliderBuilder::new(SharedShape(object.surface().clone()))
-                    .density(0.0)
-                    .friction(1.0)
-                    .friction_combine_rule(CoefficientCombineRule::Multiply)
-                    .collision_groups(groups(SURFACE_GROUP, GRIPPER_GROUP)),
-                object_body,
-                &mut world.bodies,
-            );
-        }
+        let object_body = insert_object(&mut world, object, table_from_object, params);
         Self {
             world,
             table,
             object_body,
             object_shape: object.shape().clone(),
             object_surface: object.surface().clone(),
+            neighbours: Vec::new(),
             pads: Vec::new(),
         }
+    }
+
+    /// Adds another object resting at `table_from_object`: it collides with the table, the
+    /// object, the other neighbours and the hand, and the approach must clear it.
+    pub fn add_neighbour(
+        &mut self,
+        object: &PhysicsObject,
+        table_from_object: &Pose3,
+        params: &PhysicsParams,
+    ) {
+        let body = insert_object(&mut self.world, object, table_from_object, params);
+        self.neighbours.push((body, object.surface().clone()));
+    }
+
+    /// The neighbours' centres of mass in the world, in the order they were added.
+    pub fn neighbour_coms(&self) -> Vec<Vec3> {
+        self.neighbours
+            .iter()
+            .map(|(body, _)| {
+                self.world
+                    .bodies
+                    .get(*body)
+                    .map_or(Vec3::ZERO, |b| b.center_of_mass())
+            })
+            .collect()
     }
 
     /// One rapier step, after setting each pad's twist brake for it.
@@ -486,8 +467,8 @@ impl Scene {
     }
 
     /// Whether the open gripper, moving in a straight line from `world_from_pregrasp` by
-    /// `motion` (world frame), comes within [`SWEEP_TOUCH_M`] of the table or the object
-    /// anywhere on the way, the start and the end included.
+    /// `motion` (world frame), comes within [`SWEEP_TOUCH_M`] of the table, the object or a
+    /// neighbour anywhere on the way, the start and the end included.
     ///
     /// Conservative advancement on exact distances: a shape that is `d` away from an obstacle
     /// can move `d` along a straight line before it can touch it, so the path is walked in
@@ -524,9 +505,86 @@ impl Scene {
                     exact_distance(pose, *cuboid, &table_pose, table_shape)
                 })
             };
-            path_touches(start, motion, to_object) || path_touches(start, motion, to_table)
+            path_touches(start, motion, to_object)
+                || path_touches(start, motion, to_table)
+                || self.neighbours.iter().any(|(body, surface)| {
+                    let Some(world_from_neighbour) =
+                        self.world.bodies.get(*body).map(|b| *b.position())
+                    else {
+                        return false;
+                    };
+                    path_touches(start, motion, |pose: &Pose3| {
+                        Some(cuboid_mesh_gap(
+                            cuboid,
+                            pose,
+                            surface,
+                            &world_from_neighbour,
+                            SWEEP_REACH_M,
+                        ))
+                    })
+                })
         })
     }
+}
+
+/// Inserts `object` as a dynamic body resting at `table_from_object`, with its collision
+/// shape (and its true surface, when the hand grips that); its body.
+fn insert_object(
+    world: &mut PhysicsWorld,
+    object: &PhysicsObject,
+    table_from_object: &Pose3,
+    params: &PhysicsParams,
+) -> RigidBodyHandle {
+    let object_body = world.insert_body(
+        RigidBodyBuilder::dynamic()
+            .pose(*table_from_object)
+            .can_sleep(false),
+    );
+    // One collider: the parts turned to stand as they rest on the table, so that the
+    // compound's frame is the table's. rapier finds the parts near another shape by that
+    // shape's box in the compound's frame: in the mesh's own frame the box of a table
+    // tilted under a lying object spans every part, and hundreds of parts then cost
+    // seconds a trial; axis-aligned it holds the parts near the table only.
+    let turn = Pose3::from_rotation(table_from_object.rotation);
+    let parts: Vec<(Pose3, SharedShape)> = object
+        .parts()
+        .into_iter()
+        .map(|(pose, part)| (turn * pose, part))
+        .collect();
+    let shape = match parts.as_slice() {
+        [(pose, only)] if *pose == Pose3::IDENTITY => only.clone(),
+        _ => SharedShape::compound(parts),
+    };
+    let collider_in_body = turn.inverse();
+    world.colliders.insert_with_parent(
+        // Friction 1 combined by product: a pair's coefficient is the other collider's, so
+        // the table's against the table and the pads' against the hand.
+        ColliderBuilder::new(shape)
+            .position(collider_in_body)
+            // A collider's mass properties are in its own frame.
+            .mass_properties(
+                object
+                    .mass_properties(params.object_density_kg_m3)
+                    .transform_by(&turn),
+            )
+            .friction(1.0)
+            .friction_combine_rule(CoefficientCombineRule::Multiply)
+            .collision_groups(groups(OBJECT_GROUP, Group::ALL)),
+        object_body,
+        &mut world.bodies,
+    );
+    if params.grip_true_surface {
+        world.colliders.insert_with_parent(
+            ColliderBuilder::new(SharedShape(object.surface().clone()))
+                .density(0.0)
+                .friction(1.0)
+                .friction_combine_rule(CoefficientCombineRule::Multiply)
+                .collision_groups(groups(SURFACE_GROUP, GRIPPER_GROUP)),
+            object_body,
+            &mut world.bodies,
+        );
+    }
+    object_body
 }
 
 /// How close the sweep may come to an obstacle before it counts as touching it, metres.

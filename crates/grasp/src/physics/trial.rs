@@ -96,6 +96,34 @@ pub fn simulate_grasp(
     gripper: &Gripper,
     params: &PhysicsParams,
 ) -> Result<PhysicsOutcome> {
+    simulate_grasp_among(object, table_from_object, &[], grasp, gripper, params)
+}
+
+/// [`simulate_grasp`] with other objects on the table (`neighbours`, each resting at its pose):
+/// they settle with the object, the approach must clear them as it clears the object, the hand
+/// and the object push them as they meet, and the object is held only if it comes out alone:
+/// a neighbour whose centre of mass has risen as far as the object must
+/// ([`PhysicsParams::min_lift_fraction`] of the lift) has come along, and the phase fails.
+/// Without neighbours it is [`simulate_grasp`], step for step.
+///
+/// # Errors
+/// See [`simulate_grasp`]; a non-finite neighbour pose.
+pub fn simulate_grasp_among(
+    object: &PhysicsObject,
+    table_from_object: &Pose3,
+    neighbours: &[(&PhysicsObject, Pose3)],
+    grasp: &Grasp,
+    gripper: &Gripper,
+    params: &PhysicsParams,
+) -> Result<PhysicsOutcome> {
+    if let Some((_, pose)) = neighbours.iter().find(|(_, pose)| !pose.is_finite()) {
+        return Err(GraspError::InvalidParameter {
+            op: "physics trial",
+            name: "neighbour pose",
+            value: format!("{pose:?}"),
+            expected: "a finite pose",
+        });
+    }
     params.validate()?;
     gripper.validate()?;
     for (name, pose) in [
@@ -111,8 +139,12 @@ pub fn simulate_grasp(
             });
         }
     }
+    let mut scene = Scene::new(object, table_from_object, params);
+    for (neighbour, pose) in neighbours {
+        scene.add_neighbour(neighbour, pose, params);
+    }
     let mut trial = Trial {
-        scene: Scene::new(object, table_from_object, params),
+        scene,
         params,
         steps: 0,
     };
@@ -131,6 +163,8 @@ struct Grip {
     /// The gripper's narrowest opening: fingers within [`SHUT_TOLERANCE_M`] of it hold nothing.
     min_opening_m: f32,
     rest_com_z: f32,
+    /// The neighbours' centres of mass' heights once settled.
+    neighbour_rest_z: Vec<f32>,
     /// The object in the gripper frame when the fingers had closed.
     gripper_from_object: Pose3,
     /// Its centre of mass in the gripper frame then.
@@ -207,6 +241,7 @@ impl Trial<'_> {
         rest_com: Vec3,
     ) -> std::result::Result<Grip, f32> {
         let p = self.params;
+        let neighbour_rest_z: Vec<f32> = self.scene.neighbour_coms().iter().map(|c| c.z).collect();
         let force_n = p.closing_force_n.unwrap_or(gripper.force_limit_n);
         let hand = self
             .scene
@@ -239,6 +274,7 @@ impl Trial<'_> {
         Ok(Grip {
             min_opening_m: gripper.min_opening_m,
             rest_com_z: rest_com.z,
+            neighbour_rest_z,
             gripper_from_object: world_from_gripper.inverse() * self.scene.world_from_object(),
             com_in_gripper: world_from_gripper.inverse_transform_point(self.scene.object_com()),
             hand,
@@ -363,12 +399,19 @@ impl Trial<'_> {
             .iter()
             .all(|&f| scene.finger_distance(f) <= p.contact_tolerance_m);
         let off_table = scene.distance_to_object(scene.table) > p.contact_tolerance_m;
+        let min_lift_m = p.min_lift_fraction * p.lift_height_m;
+        let alone = scene
+            .neighbour_coms()
+            .iter()
+            .zip(&grip.neighbour_rest_z)
+            .all(|(com, rest_z)| com.z - rest_z < min_lift_m);
         let opening_m = self.opening(&grip.hand);
         Hold {
             held: fingers_touch
                 && off_table
+                && alone
                 && !shut(opening_m, grip.min_opening_m)
-                && lift_m >= p.min_lift_fraction * p.lift_height_m
+                && lift_m >= min_lift_m
                 && p.max_slip_m.is_none_or(|max| slip_m <= max),
             lift_m,
             slip_m,
