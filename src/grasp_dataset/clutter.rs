@@ -83,18 +83,28 @@ impl ClutterParams {
 
 /// A neighbour as loaded once for an object: its mesh, the shape the hand check meets, and
 /// its steady resting poses with their probabilities.
-pub(crate) struct Neighbour {
+pub struct Neighbour {
     mesh: TriangleMesh,
     object: GraspObject,
     poses: Vec<(f32, Pose3)>,
 }
 
 impl Neighbour {
+    /// Its mesh, in its own frame.
+    pub fn mesh(&self) -> &TriangleMesh {
+        &self.mesh
+    }
+
+    /// The shape the hand check meets.
+    pub fn object(&self) -> &GraspObject {
+        &self.object
+    }
+
     /// `mesh` as a neighbour.
     ///
     /// # Errors
     /// A mesh with no stable pose or that the hand check cannot use.
-    pub(crate) fn new(mesh: TriangleMesh) -> Result<Self> {
+    pub fn new(mesh: TriangleMesh) -> Result<Self> {
         let poses = RestingPoses::of(&mesh)?
             .iter()
             .map(|(_, p)| (p.probability, p.table_from_object))
@@ -109,7 +119,7 @@ impl Neighbour {
 
 /// A neighbour placed on the table.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Placed {
+pub struct Placed {
     /// Index into the neighbours.
     pub index: usize,
     /// Where it rests.
@@ -138,7 +148,7 @@ fn apart(a: [f32; 4], b: [f32; 4], gap: f32) -> bool {
 
 /// Places a random number of `neighbours` (each at most once, in a random order) around the
 /// object `mesh` resting at `table_from_object`.
-pub(crate) fn place(
+pub fn place(
     mesh: &TriangleMesh,
     table_from_object: &Pose3,
     neighbours: &[Neighbour],
@@ -193,7 +203,7 @@ pub(crate) fn place(
 ///
 /// # Errors
 /// A mesh that cannot be joined (no triangles).
-pub(crate) fn scene_mesh(
+pub fn scene_mesh(
     mesh: &TriangleMesh,
     table_from_object: &Pose3,
     neighbours: &[Neighbour],
@@ -210,7 +220,7 @@ pub(crate) fn scene_mesh(
 
 /// Whether the open hand of a grasp `width_m` wide at `table_from_gripper`, swept along its
 /// approach, meets a placed neighbour.
-pub(crate) fn hits_a_neighbour(
+pub fn hits_a_neighbour(
     gripper: &Gripper,
     table_from_gripper: &Pose3,
     width_m: f32,
