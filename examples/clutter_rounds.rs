@@ -15,8 +15,11 @@
 //!
 //! ```text
 //! cargo run --release --example clutter_rounds -- [--rounds 20] [--objects 5] [--seed 0]
-//!     [--model RUN/NAME.json]
+//!     [--model RUN/NAME.json | --fused]
 //! ```
+//!
+//! `--fused`: five views (the top-down one and four 50 degrees up around the scene, 0.7 m
+//! away), fused by the multi-view planner (`plan_on_views`, as `plan --views-dir` plans).
 //!
 //! Prints each grasp and, at the end, the success rate (held of grasps tried) and the share of
 //! objects cleared, as VGN and GIGA report them.
@@ -30,7 +33,9 @@ use mvgrasp::geometry::{Camera, Intrinsics, IntrinsicsPreset, Pose3, RestingPose
 use mvgrasp::grasp::physics::{FailureStage, PhysicsObject, simulate_grasp_among};
 use mvgrasp::grasp::{GraspObject, LabelSettings};
 use mvgrasp::grasp_dataset::clutter::{ClutterParams, Neighbour, place};
-use mvgrasp::planner::{GqcnnPolicy, Planner, SensorPlanParams, View, models, plan_on_view};
+use mvgrasp::planner::{
+    GqcnnPolicy, PlanOptions, Planner, SensorPlanParams, View, models, plan_on_view, plan_on_views,
+};
 use mvgrasp::render::{Backend, Renderer};
 use mvgrasp::scene::render_depths;
 use parry3d::query::PointQuery;
@@ -49,9 +54,13 @@ struct Args {
     /// Seeds the scenes.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// A top-down GQ-CNN export (`NAME.json`) instead of the shipped one.
-    #[arg(long)]
+    /// A top-down GQ-CNN export (`NAME.json`) instead of the shipped one (one view only).
+    #[arg(long, conflicts_with = "fused")]
     model: Option<std::path::PathBuf>,
+    /// Five views (the top-down one and four 50 degrees up around the scene, 0.7 m away),
+    /// fused by the multi-view planner, as `plan --views-dir` plans.
+    #[arg(long)]
+    fused: bool,
 }
 
 /// One object of a scene: its mesh resting at its pose, and its shapes for the trial.
@@ -71,13 +80,36 @@ fn run(args: Args) -> CliResult<()> {
     let renderer = Renderer::new(Backend::Auto)?;
     let labels = LabelSettings::default();
     let gripper = labels.gripper.clone();
-    let net = match &args.model {
-        Some(path) => mvgrasp::infer::Gqcnn::load(path)?,
-        None => models::GQCNN_TOPDOWN.load()?,
+    let (planner, base_params) = if args.fused {
+        let options = PlanOptions {
+            fuse: true,
+            ..PlanOptions::default()
+        };
+        let (planner, _, params) = options.on_depth(models::MVGQCNN.load()?)?;
+        (planner, params)
+    } else {
+        let net = match &args.model {
+            Some(path) => mvgrasp::infer::Gqcnn::load(path)?,
+            None => models::GQCNN_TOPDOWN.load()?,
+        };
+        let planner = Planner::from(GqcnnPolicy::new(net, gripper.max_opening_m)?);
+        (planner, SensorPlanParams::default())
     };
-    let planner = Planner::from(GqcnnPolicy::new(net, gripper.max_opening_m)?);
     let k = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
-    let camera = Camera::look_at(k, Vec3::new(0.0, 0.0, 0.7), Vec3::ZERO, Vec3::Y)?;
+    let mut cameras = vec![Camera::look_at(
+        k,
+        Vec3::new(0.0, 0.0, 0.7),
+        Vec3::ZERO,
+        Vec3::Y,
+    )?];
+    if args.fused {
+        let e = 50.0f32.to_radians();
+        for azimuth in [0.0f32, 90.0, 180.0, 270.0] {
+            let a = azimuth.to_radians();
+            let eye = Vec3::new(e.cos() * a.cos(), e.cos() * a.sin(), e.sin()) * 0.7;
+            cameras.push(Camera::look_at(k, eye, Vec3::ZERO, Vec3::Z)?);
+        }
+    }
     let (mut tried, mut held, mut cleared, mut total) = (0usize, 0usize, 0usize, 0usize);
     let mut unsettled = 0usize;
     for round in 0..args.rounds {
@@ -89,21 +121,34 @@ fn run(args: Args) -> CliResult<()> {
         while !scene.is_empty() && failures_in_a_row < 2 {
             let parts: Vec<_> = scene.iter().map(|o| o.mesh.transformed(&o.pose)).collect();
             let merged = mvgrasp::geometry::TriangleMesh::concatenate(&parts, parts[0].origin())?;
-            let depth = render_depths(&renderer, &merged, &Pose3::IDENTITY, &[camera])?.remove(0);
-            let view = View {
-                camera,
-                depth,
-                mask: None,
-            };
+            let depths = render_depths(&renderer, &merged, &Pose3::IDENTITY, &cameras)?;
+            let views: Vec<View> = cameras
+                .iter()
+                .zip(depths)
+                .map(|(camera, depth)| View {
+                    camera: *camera,
+                    depth,
+                    mask: None,
+                })
+                .collect();
             // Each attempt samples anew (the scene is as before a failure, so the same seed
             // would plan the same grasp).
             let params = SensorPlanParams {
                 seed: attempt,
-                ..SensorPlanParams::default()
+                ..base_params.clone()
             };
             attempt += 1;
-            let report = plan_on_view(&planner, &gripper, view, true, &params);
-            let Some(best) = report.ok().and_then(|r| r.best) else {
+            let best = if args.fused {
+                plan_on_views(&planner, &gripper, views, &params)
+                    .ok()
+                    .and_then(|r| r.best)
+            } else {
+                let view = views.into_iter().next().ok_or("no view")?;
+                plan_on_view(&planner, &gripper, view, true, &params)
+                    .ok()
+                    .and_then(|r| r.best)
+            };
+            let Some(best) = best else {
                 println!("round {round}: no grasp with {} objects left", scene.len());
                 break;
             };
