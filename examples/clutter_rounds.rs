@@ -25,13 +25,14 @@
 //! objects cleared, as VGN and GIGA report them.
 
 use std::process::ExitCode;
+use std::rc::Rc;
 
 use clap::Parser;
 use mvgrasp::cli::CliResult;
 use mvgrasp::geometry::objects::{Category, generate};
-use mvgrasp::geometry::{Camera, Intrinsics, IntrinsicsPreset, Pose3, RestingPoses, Vec3};
+use mvgrasp::geometry::{Camera, Intrinsics, IntrinsicsPreset, Pose3, Vec3};
+use mvgrasp::grasp::LabelSettings;
 use mvgrasp::grasp::physics::{FailureStage, PhysicsObject, simulate_grasp_among};
-use mvgrasp::grasp::{GraspObject, LabelSettings};
 use mvgrasp::grasp_dataset::clutter::{ClutterParams, Neighbour, place};
 use mvgrasp::planner::{
     GqcnnPolicy, PlanOptions, Planner, SensorPlanParams, View, models, plan_on_view, plan_on_views,
@@ -66,10 +67,10 @@ struct Args {
 /// One object of a scene: its mesh resting at its pose, and its shapes for the trial.
 struct Placed {
     name: String,
-    mesh: mvgrasp::geometry::TriangleMesh,
+    /// Its mesh and the shape its distance is measured to.
+    shape: Rc<Neighbour>,
     pose: Pose3,
     physics: PhysicsObject,
-    grasp_object: GraspObject,
 }
 
 fn main() -> ExitCode {
@@ -119,7 +120,10 @@ fn run(args: Args) -> CliResult<()> {
         let mut failures_in_a_row = 0;
         let mut attempt = 0u64;
         while !scene.is_empty() && failures_in_a_row < 2 {
-            let parts: Vec<_> = scene.iter().map(|o| o.mesh.transformed(&o.pose)).collect();
+            let parts: Vec<_> = scene
+                .iter()
+                .map(|o| o.shape.mesh().transformed(&o.pose))
+                .collect();
             let merged = mvgrasp::geometry::TriangleMesh::concatenate(&parts, parts[0].origin())?;
             let depths = render_depths(&renderer, &merged, &Pose3::IDENTITY, &cameras)?;
             let views: Vec<View> = cameras
@@ -224,15 +228,11 @@ fn pack(count: usize, labels: &LabelSettings, rng: &mut ChaCha8Rng) -> CliResult
         let index = 30 + rng.random_range(0..5u32);
         chosen.push((category, index));
     }
-    let meshes: Vec<_> = chosen
+    let objects: Vec<Rc<Neighbour>> = chosen
         .iter()
-        .map(|&(c, i)| generate(c, i, 0).map(|o| o.mesh))
-        .collect::<Result<_, _>>()?;
-    let first_pose = RestingPoses::of(&meshes[0])?.get(0)?.1.table_from_object;
-    let neighbours: Vec<Neighbour> = meshes[1..]
-        .iter()
-        .map(|m| Neighbour::new(m.clone()))
-        .collect::<Result<_, _>>()?;
+        .map(|&(c, i)| Ok(Rc::new(Neighbour::new(generate(c, i, 0)?.mesh)?)))
+        .collect::<CliResult<_>>()?;
+    let first_pose = objects[0].most_probable_pose();
     let params = ClutterParams {
         neighbours: [count - 1, count - 1],
         spread_m: 0.1,
@@ -240,20 +240,19 @@ fn pack(count: usize, labels: &LabelSettings, rng: &mut ChaCha8Rng) -> CliResult
         tries: 50,
     };
     let mut poses = vec![(0, first_pose)];
-    for p in place(&meshes[0], &first_pose, &neighbours, &params, rng) {
+    for p in place(objects[0].mesh(), &first_pose, &objects[1..], &params, rng) {
         poses.push((p.index + 1, p.table_from_neighbour));
     }
     poses
         .into_iter()
         .map(|(i, pose)| {
-            let grasp_object = GraspObject::new(meshes[i].clone())?;
-            let physics = PhysicsObject::from_grasp_object(&grasp_object, &labels.physics_shape)?;
+            let physics =
+                PhysicsObject::from_grasp_object(objects[i].object(), &labels.physics_shape)?;
             Ok(Placed {
                 name: format!("{}_{:03}", chosen[i].0.name(), chosen[i].1),
-                mesh: meshes[i].clone(),
+                shape: Rc::clone(&objects[i]),
                 pose,
                 physics,
-                grasp_object,
             })
         })
         .collect()
@@ -263,7 +262,8 @@ fn pack(count: usize, labels: &LabelSettings, rng: &mut ChaCha8Rng) -> CliResult
 fn nearest(scene: &[Placed], point: Vec3) -> usize {
     let distance = |o: &Placed| {
         let local = o.pose.inverse_transform_point(point);
-        o.grasp_object
+        o.shape
+            .object()
             .caster()
             .trimesh()
             .distance_to_local_point(local, true)

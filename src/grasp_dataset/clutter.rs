@@ -10,6 +10,8 @@
 //! gap from every footprint placed before it. Grasps are made on the object only, never on a
 //! neighbour, so that an object-wise split of the dataset stays object-wise for the grasps.
 
+use std::borrow::Borrow;
+
 use mvgrasp_geometry::{Pose3, RestingPoses, Rot3, TriangleMesh, Vec3};
 use mvgrasp_grasp::{GraspObject, Gripper, HandShapes};
 use rand::{Rng, RngExt};
@@ -100,12 +102,21 @@ impl Neighbour {
         &self.object
     }
 
+    /// Its most probable steady resting pose.
+    pub fn most_probable_pose(&self) -> Pose3 {
+        self.poses[0].1
+    }
+
     /// `mesh` as a neighbour.
     ///
     /// # Errors
-    /// A mesh with no stable pose or that the hand check cannot use.
+    /// A mesh with no stable pose (an empty list of them included) or that the hand check
+    /// cannot use.
     pub fn new(mesh: TriangleMesh) -> Result<Self> {
-        let poses = RestingPoses::of(&mesh)?
+        let resting = RestingPoses::of(&mesh)?;
+        // At least one pose: the first is the most probable.
+        resting.get(0)?;
+        let poses = resting
             .iter()
             .map(|(_, p)| (p.probability, p.table_from_object))
             .collect();
@@ -146,32 +157,40 @@ fn apart(a: [f32; 4], b: [f32; 4], gap: f32) -> bool {
     a[2] + gap <= b[0] || b[2] + gap <= a[0] || a[3] + gap <= b[1] || b[3] + gap <= a[1]
 }
 
+/// `wanted` of `items`, drawn without repeats in a random order (the first `wanted` of a
+/// Fisher-Yates shuffle).
+pub(crate) fn draw_without_repeats(
+    mut items: Vec<usize>,
+    wanted: usize,
+    rng: &mut impl Rng,
+) -> Vec<usize> {
+    let wanted = wanted.min(items.len());
+    for i in 0..wanted {
+        let j = rng.random_range(i..items.len());
+        items.swap(i, j);
+    }
+    items.truncate(wanted);
+    items
+}
+
 /// Places a random number of `neighbours` (each at most once, in a random order) around the
 /// object `mesh` resting at `table_from_object`.
 pub fn place(
     mesh: &TriangleMesh,
     table_from_object: &Pose3,
-    neighbours: &[Neighbour],
+    neighbours: &[impl Borrow<Neighbour>],
     params: &ClutterParams,
     rng: &mut impl Rng,
 ) -> Vec<Placed> {
     let [lo, hi] = params.neighbours;
-    let wanted = rng.random_range(lo..=hi).min(neighbours.len());
-    let mut order: Vec<usize> = (0..neighbours.len()).collect();
-    // Fisher-Yates on the first `wanted`.
-    for i in 0..wanted {
-        let j = rng.random_range(i..order.len());
-        order.swap(i, j);
-    }
+    let wanted = rng.random_range(lo..=hi);
+    let order = draw_without_repeats((0..neighbours.len()).collect(), wanted, rng);
     let mut footprints = vec![footprint(mesh, table_from_object)];
     let mut placed = Vec::new();
-    for &index in &order[..wanted] {
-        let neighbour = &neighbours[index];
-        if neighbour.poses.is_empty() {
-            continue;
-        }
+    for index in order {
+        let neighbour: &Neighbour = neighbours[index].borrow();
+        let total: f32 = neighbour.poses.iter().map(|(p, _)| p).sum();
         for _ in 0..params.tries {
-            let total: f32 = neighbour.poses.iter().map(|(p, _)| p).sum();
             let mut pick = rng.random_range(0.0..total.max(f32::MIN_POSITIVE));
             let pose = neighbour
                 .poses
@@ -206,12 +225,13 @@ pub fn place(
 pub fn scene_mesh(
     mesh: &TriangleMesh,
     table_from_object: &Pose3,
-    neighbours: &[Neighbour],
+    neighbours: &[impl Borrow<Neighbour>],
     placed: &[Placed],
 ) -> Result<TriangleMesh> {
     let mut parts = vec![mesh.transformed(table_from_object)];
     parts.extend(placed.iter().map(|p| {
         neighbours[p.index]
+            .borrow()
             .mesh
             .transformed(&p.table_from_neighbour)
     }));
@@ -224,7 +244,7 @@ pub fn hits_a_neighbour(
     gripper: &Gripper,
     table_from_gripper: &Pose3,
     width_m: f32,
-    neighbours: &[Neighbour],
+    neighbours: &[impl Borrow<Neighbour>],
     placed: &[Placed],
 ) -> bool {
     if placed.is_empty() {
@@ -237,7 +257,10 @@ pub fn hits_a_neighbour(
     );
     placed.iter().any(|p| {
         let neighbour_from_gripper = p.table_from_neighbour.inverse() * *table_from_gripper;
-        hand.hits_object(&neighbours[p.index].object, &neighbour_from_gripper)
+        hand.hits_object(
+            &neighbours[p.index].borrow().object,
+            &neighbour_from_gripper,
+        )
     })
 }
 

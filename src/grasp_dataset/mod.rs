@@ -40,10 +40,11 @@ pub use config::{
 pub use shard::{COLUMNS, Counts, Datapoint, ShardColumn, ShardRecord, read_shard};
 
 use std::path::Path;
+use std::sync::{Arc, OnceLock};
 
 use indicatif::{ProgressBar, ProgressStyle};
 use mvgrasp_render::Renderer;
-use rand::{RngExt, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -109,6 +110,9 @@ pub struct DatasetPlan {
     resolved: Resolved,
     /// See [`DatasetPlan::hash`].
     hash: String,
+    /// Each object as a neighbour, built the first time clutter asks for it (`None`: it cannot
+    /// be one); shared by every object it clutters.
+    as_neighbour: Vec<OnceLock<Option<Arc<clutter::Neighbour>>>>,
 }
 
 impl DatasetPlan {
@@ -148,6 +152,7 @@ impl DatasetPlan {
                 expected: "a config that serialises to JSON",
             })?;
         Ok(Self {
+            as_neighbour: objects.iter().map(|_| OnceLock::new()).collect(),
             objects,
             resolved: Resolved {
                 gripper: config.gripper()?,
@@ -187,23 +192,21 @@ impl DatasetPlan {
     /// The neighbours that clutter object `index` (seeded with `object_seed`): as many of the
     /// other objects as the clutter config may place, drawn without repeats; one that cannot
     /// be loaded or has no stable pose is left out. None without clutter.
-    fn neighbours_of(&self, index: usize, object_seed: u64) -> Vec<clutter::Neighbour> {
+    fn neighbours_of(&self, index: usize, object_seed: u64) -> Vec<Arc<clutter::Neighbour>> {
         let Some(params) = &self.config.clutter else {
             return Vec::new();
         };
         let others: Vec<usize> = (0..self.objects.len()).filter(|&i| i != index).collect();
-        let wanted = params.neighbours[1].min(others.len());
         let mut rng = ChaCha8Rng::seed_from_u64(splitmix(object_seed ^ CLUTTER_SEED));
-        let mut order = others;
-        for i in 0..wanted {
-            let j = rng.random_range(i..order.len());
-            order.swap(i, j);
-        }
-        order[..wanted]
-            .iter()
-            .filter_map(|&i| {
-                let mesh = self.objects[i].1.load().ok()?;
-                clutter::Neighbour::new(mesh).ok()
+        clutter::draw_without_repeats(others, params.neighbours[1], &mut rng)
+            .into_iter()
+            .filter_map(|i| {
+                self.as_neighbour[i]
+                    .get_or_init(|| {
+                        let mesh = self.objects[i].1.load().ok()?;
+                        clutter::Neighbour::new(mesh).ok().map(Arc::new)
+                    })
+                    .clone()
             })
             .collect()
     }

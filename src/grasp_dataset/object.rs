@@ -12,6 +12,7 @@ use mvgrasp_render::Renderer;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
+use std::sync::Arc;
 
 use mvgrasp_planner::{crop_depth, theta_rad};
 
@@ -59,7 +60,7 @@ pub(crate) fn object_datapoints(
     object_seed: u64,
     config: &GraspDatasetConfig,
     resolved: &Resolved,
-    neighbours: &[Neighbour],
+    neighbours: &[Arc<Neighbour>],
 ) -> Result<Vec<Datapoint>> {
     let poses: Vec<_> = RestingPoses::of(mesh)?
         .iter()
