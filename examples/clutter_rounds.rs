@@ -49,9 +49,9 @@ struct Args {
     /// Rounds (scenes).
     #[arg(long, default_value_t = 20)]
     rounds: usize,
-    /// Objects packed per scene.
-    #[arg(long, default_value_t = 5)]
-    objects: usize,
+    /// Objects packed per scene (at least 1).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u16).range(1..))]
+    objects: u16,
     /// Seeds the scenes.
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -115,7 +115,7 @@ fn run(args: Args) -> CliResult<()> {
     let mut unsettled = 0usize;
     for round in 0..args.rounds {
         let mut rng = ChaCha8Rng::seed_from_u64(args.seed ^ (round as u64).wrapping_mul(0x9e37));
-        let mut scene = pack(args.objects, &labels, &mut rng)?;
+        let mut scene = pack(usize::from(args.objects), &labels, &mut rng)?;
         total += scene.len();
         let mut failures_in_a_row = 0;
         let mut attempt = 0u64;
