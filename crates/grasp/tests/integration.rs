@@ -9,4 +9,5 @@ mod clutter_trial;
 mod gripper_urdf;
 mod mechanics;
 mod physics;
+mod pile;
 mod quality;

@@ -79,6 +79,7 @@
 
 mod object;
 mod params;
+mod pile;
 mod robust;
 mod scene;
 pub mod shell;
@@ -86,6 +87,7 @@ mod trial;
 
 pub use object::{PhysicsObject, shape_error};
 pub use params::{PhysicsNoise, PhysicsParams};
+pub use pile::{Drop, PileParams, drop_pile};
 pub use robust::{StageCounts, SuccessEstimate, success_probability};
 pub use scene::{PAD_BALL_RADIUS_M, PAD_BALLS, pad_ring_radius};
 pub use shell::{ShapeError, ShapeParams};

@@ -192,37 +192,7 @@ impl HandShape {
 impl Scene {
     /// The table and `object` placed at `table_from_object` (world = table frame).
     pub fn new(object: &PhysicsObject, table_from_object: &Pose3, params: &PhysicsParams) -> Self {
-        let mut world = PhysicsWorld::new();
-        world.gravity = Vec3::new(0.0, 0.0, -9.81);
-        let ip = &mut world.integration_parameters;
-        ip.dt = params.timestep_s;
-        ip.num_solver_iterations = params.solver_iterations;
-        ip.length_unit = params.solver_length_unit_m;
-        let soft =
-            SpringCoefficients::new(params.contact_frequency_hz, params.contact_damping_ratio);
-        ip.contact_softness = soft;
-        ip.static_contact_softness = soft;
-        // One Coulomb cone per contact point: the torque a finger pad resists about the closing
-        // axis comes from its contact points' spread, which decides off-centre grasps.
-        ip.friction_model = FrictionModel::Coulomb;
-        // Contacts are recomputed only when a pair has moved by more than 0.3 mm since (rapier's
-        // default, 15 mm at this length unit, let the fingers squeeze through a can on stale
-        // contacts); a resting or held object's pairs are reused, most of a trial's steps.
-        ip.contact_recycling = true;
-        ip.normalized_contact_recycle_distance = 1.0e-3;
-        // No continuous collision detection: nothing moves faster than a few millimetres a step
-        // (the contacts' prediction distance), and its sweeps recomputed every slab's mass
-        // properties each step, a third of a trial's time on a shell of slabs.
-        ip.max_ccd_substeps = 0;
-
-        let table_body = world.insert_body(RigidBodyBuilder::fixed());
-        let table = world.insert_collider(
-            ColliderBuilder::cuboid(TABLE_HALF_SIDE_M, TABLE_HALF_SIDE_M, TABLE_HALF_THICKNESS_M)
-                .translation(Vec3::new(0.0, 0.0, -TABLE_HALF_THICKNESS_M))
-                .friction(params.table_friction)
-                .collision_groups(groups(TABLE_GROUP, Group::ALL)),
-            Some(table_body),
-        );
+        let (mut world, table) = table_world(params);
         let object_body = insert_object(&mut world, object, table_from_object, params);
         Self {
             world,
@@ -527,9 +497,45 @@ impl Scene {
     }
 }
 
+/// A world of the trial's settings holding only the table (its top the plane z = 0), and the
+/// table's collider.
+pub(crate) fn table_world(params: &PhysicsParams) -> (PhysicsWorld, ColliderHandle) {
+    let mut world = PhysicsWorld::new();
+    world.gravity = Vec3::new(0.0, 0.0, -9.81);
+    let ip = &mut world.integration_parameters;
+    ip.dt = params.timestep_s;
+    ip.num_solver_iterations = params.solver_iterations;
+    ip.length_unit = params.solver_length_unit_m;
+    let soft = SpringCoefficients::new(params.contact_frequency_hz, params.contact_damping_ratio);
+    ip.contact_softness = soft;
+    ip.static_contact_softness = soft;
+    // One Coulomb cone per contact point: the torque a finger pad resists about the closing
+    // axis comes from its contact points' spread, which decides off-centre grasps.
+    ip.friction_model = FrictionModel::Coulomb;
+    // Contacts are recomputed only when a pair has moved by more than 0.3 mm since (rapier's
+    // default, 15 mm at this length unit, let the fingers squeeze through a can on stale
+    // contacts); a resting or held object's pairs are reused, most of a trial's steps.
+    ip.contact_recycling = true;
+    ip.normalized_contact_recycle_distance = 1.0e-3;
+    // No continuous collision detection: nothing moves faster than a few millimetres a step
+    // (the contacts' prediction distance), and its sweeps recomputed every slab's mass
+    // properties each step, a third of a trial's time on a shell of slabs.
+    ip.max_ccd_substeps = 0;
+
+    let table_body = world.insert_body(RigidBodyBuilder::fixed());
+    let table = world.insert_collider(
+        ColliderBuilder::cuboid(TABLE_HALF_SIDE_M, TABLE_HALF_SIDE_M, TABLE_HALF_THICKNESS_M)
+            .translation(Vec3::new(0.0, 0.0, -TABLE_HALF_THICKNESS_M))
+            .friction(params.table_friction)
+            .collision_groups(groups(TABLE_GROUP, Group::ALL)),
+        Some(table_body),
+    );
+    (world, table)
+}
+
 /// Inserts `object` as a dynamic body resting at `table_from_object`, with its collision
 /// shape (and its true surface, when the hand grips that); its body.
-fn insert_object(
+pub(crate) fn insert_object(
     world: &mut PhysicsWorld,
     object: &PhysicsObject,
     table_from_object: &Pose3,
