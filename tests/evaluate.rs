@@ -14,8 +14,8 @@ impl Progress for Quiet {
 }
 
 /// Two small built-in objects as mesh files in `dir/meshes`, and a config that plans on them
-/// with the depth planner, two seeds and the exhaustive search, and predicts their depth from
-/// 1 and 2 views.
+/// with the depth planner, two seeds and the exhaustive search, predicts their depth from
+/// 1 and 2 views, and clears a packed and a pile scene of two of them from one view.
 fn two_objects(dir: &Path) -> EvalConfig {
     let meshes = dir.join("meshes");
     std::fs::create_dir_all(&meshes).unwrap();
@@ -32,9 +32,13 @@ fn two_objects(dir: &Path) -> EvalConfig {
         seeds: vec![0, 1],
         all_poses: false,
         coverage: true,
-        suites: vec!["grasps".into(), "depth".into()],
+        suites: vec!["grasps".into(), "depth".into(), "clutter".into()],
         depth_views: vec![1, 2],
         depth_distance_m: 0.5,
+        clutter_scenes: vec!["packed".into(), "pile".into()],
+        clutter_views: vec![1],
+        clutter_rounds: 1,
+        clutter_objects: 2,
     }
 }
 
@@ -86,9 +90,16 @@ fn a_run_interrupted_and_resumed_writes_the_same_bytes_as_one_that_was_not() {
     let lines: Vec<&str> = records.lines().collect();
     assert_eq!(
         lines.len(),
-        2 * (1 + 2 + 1),
-        "per object: its poses, a grasp per seed, its depth"
+        2 * (1 + 2 + 1) + 2,
+        "per object: its poses, a grasp per seed, its depth; a round per clutter scene"
     );
+    assert_eq!(results.clutter.len(), 2, "{:?}", results.skipped);
+    assert!(
+        results.clutter.iter().all(|r| !r.attempts.is_empty()),
+        "{:?}",
+        results.clutter
+    );
+    assert!(report.contains("## Clutter"), "{report}");
     let mut kept = lines[..5].join("\n");
     kept.push('\n');
     kept.push_str(&lines[5][..lines[5].len() / 2]);
@@ -132,4 +143,22 @@ fn a_folder_of_another_runs_settings_and_an_unknown_policy_are_refused_by_name()
         message.contains("--policy sweep: expected one of rgb, depth"),
         "{message}"
     );
+    for (flag, value, expected) in [
+        ("--clutter-scene", "bin", "clutter scene \"bin\": expected packed or pile"),
+        ("--clutter-views", "0", "clutter views 0: expected 1 to 9"),
+        ("--clutter-objects", "0", "clutter objects 0: a round needs at least one"),
+    ] {
+        // Two share a folder: a refused run writes no settings there.
+        let refused = run(&[
+            "--out",
+            dir.path().join(value).to_str().unwrap(),
+            "--suite",
+            "clutter",
+            flag,
+            value,
+        ]);
+        let message = String::from_utf8_lossy(&refused.stderr);
+        assert_eq!(refused.status.code(), Some(2), "{message}");
+        assert!(message.contains(expected), "{flag}: {message}");
+    }
 }

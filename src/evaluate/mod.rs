@@ -9,6 +9,7 @@
 //! a failure. With `coverage`, an exhaustive search on the true mesh says which objects some
 //! grasp in reach can hold.
 
+pub mod clutter;
 pub mod depth;
 pub mod grasps;
 pub mod journal;
@@ -56,6 +57,34 @@ pub struct EvalConfig {
     /// The depth suite's camera distance, metres (the paper's test views: 0.5).
     #[serde(default = "paper_distance_m")]
     pub depth_distance_m: f32,
+    /// The clutter suite's scenes ([`clutter::SCENES`]).
+    #[serde(default = "both_scenes")]
+    pub clutter_scenes: Vec<String>,
+    /// Its numbers of depth views (1: the top-down GQ-CNN alone; more: fused).
+    #[serde(default = "one_view")]
+    pub clutter_views: Vec<usize>,
+    /// Its rounds per scene and number of views.
+    #[serde(default = "small_rounds")]
+    pub clutter_rounds: usize,
+    /// Objects per round (VGN and GIGA: 5).
+    #[serde(default = "five")]
+    pub clutter_objects: usize,
+}
+
+fn both_scenes() -> Vec<String> {
+    clutter::SCENES.map(String::from).to_vec()
+}
+
+fn one_view() -> Vec<usize> {
+    vec![1]
+}
+
+fn small_rounds() -> usize {
+    5
+}
+
+fn five() -> usize {
+    5
 }
 
 /// The suites of a config written before the depth suite was one.
@@ -73,7 +102,7 @@ fn paper_distance_m() -> f32 {
 }
 
 /// The suites [`evaluate`] knows.
-pub const SUITES: [&str; 2] = ["grasps", "depth"];
+pub const SUITES: [&str; 3] = ["grasps", "depth", "clutter"];
 
 impl EvalConfig {
     /// The small default: 1 held-out built-in object per category and the first 6 real meshes,
@@ -91,6 +120,10 @@ impl EvalConfig {
             suites: SUITES.map(String::from).to_vec(),
             depth_views: paper_shots(),
             depth_distance_m: paper_distance_m(),
+            clutter_scenes: both_scenes(),
+            clutter_views: one_view(),
+            clutter_rounds: small_rounds(),
+            clutter_objects: five(),
         }
     }
 }
@@ -123,7 +156,10 @@ pub struct Results {
     pub grasps: Vec<GraspRecord>,
     /// The depth suite's records, per object and number of views.
     pub depth: Vec<depth::DepthRecord>,
-    /// Objects that could not be evaluated, and why.
+    /// The clutter suite's rounds.
+    #[serde(default)]
+    pub clutter: Vec<clutter::RoundRecord>,
+    /// Objects (or clutter rounds) that could not be evaluated, and why.
     pub skipped: Vec<(String, String)>,
 }
 
@@ -133,8 +169,6 @@ pub struct Results {
 /// A folder holding another config's records, unknown set or policy names, a renderer or
 /// network that cannot start, or a report that cannot be written.
 pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) -> Result<Results> {
-    std::fs::create_dir_all(out).map_err(Error::io("create", out))?;
-    check_config(config, out)?;
     let invalid = |problem: String| Error::Evaluate { problem };
     let sets: Vec<ObjectSet> = config
         .sets
@@ -151,14 +185,31 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
     }
     if let Some(suite) = config.suites.iter().find(|s| !SUITES.contains(&s.as_str())) {
         return Err(invalid(format!(
-            "suite {suite:?}: expected grasps or depth"
+            "suite {suite:?}: expected one of {}",
+            SUITES.join(", ")
         )));
+    }
+    let scenes: Vec<clutter::ClutterScene> = config
+        .clutter_scenes
+        .iter()
+        .map(|s| s.parse().map_err(|e| invalid(format!("clutter scene {e}"))))
+        .collect::<Result<_>>()?;
+    if let Some(n) = config.clutter_views.iter().find(|n| !(1..=9).contains(*n)) {
+        return Err(invalid(format!("clutter views {n}: expected 1 to 9")));
+    }
+    if config.clutter_objects == 0 {
+        return Err(invalid(
+            "clutter objects 0: a round needs at least one".into(),
+        ));
     }
     if let Some(n) = config.depth_views.iter().find(|n| !(1..=10).contains(*n)) {
         return Err(invalid(format!(
             "depth views {n}: expected 1 to 10 (there are 10 test views)"
         )));
     }
+    // Written only once the settings are known good: a refused run leaves no config behind.
+    std::fs::create_dir_all(out).map_err(Error::io("create", out))?;
+    check_config(config, out)?;
     let mut objects: Vec<ObjectRef> = Vec::new();
     for set in &sets {
         let mut found = objects::objects(set, config.per_category, &config.data)?;
@@ -200,6 +251,7 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
         objects: Vec::new(),
         grasps: Vec::new(),
         depth: Vec::new(),
+        clutter: Vec::new(),
         skipped: Vec::new(),
     };
     let depth_suite = if config.suites.iter().any(|s| s == "depth") {
@@ -207,8 +259,22 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
     } else {
         None
     };
-    let total = objects.len();
-    for (done, object) in objects.iter().enumerate() {
+    let run_clutter = config.suites.iter().any(|s| s == "clutter");
+    let rounds: Vec<(clutter::ClutterScene, usize, usize)> = if run_clutter {
+        scenes
+            .iter()
+            .flat_map(|&scene| {
+                config.clutter_views.iter().flat_map(move |&views| {
+                    (0..config.clutter_rounds).map(move |round| (scene, views, round))
+                })
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let per_object = run_grasps || depth_suite.is_some();
+    let total = if per_object { objects.len() } else { 0 } + rounds.len();
+    for (done, object) in objects.iter().enumerate().filter(|_| per_object) {
         let id = format!("{}|{}", object.set, object.name);
         let mut work = || -> Result<()> {
             if run_grasps {
@@ -253,6 +319,28 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
             results.skipped.push((id, why));
         }
         progress.step(done + 1, total, &format!("{} {}", object.set, object.name));
+    }
+    // The clutter suite's planners and objects, built only when a round is missing.
+    let mut suite: Option<clutter::ClutterSuite> = None;
+    let before = total - rounds.len();
+    for (done, &(scene, views, round)) in rounds.iter().enumerate() {
+        let key = format!("clutter|{}|{views}|{round}", scene.name());
+        let mut work = || -> Result<clutter::RoundRecord> {
+            if let Some(record) = journal.get(&key)? {
+                return Ok(record);
+            }
+            let suite = match suite {
+                Some(ref suite) => suite,
+                None => suite.insert(clutter::ClutterSuite::new(&objects, &config.clutter_views)?),
+            };
+            let record = suite.round(&renderer, scene, views, config.clutter_objects, round)?;
+            journal.put(&key, &record)
+        };
+        match work() {
+            Ok(record) => results.clutter.push(record),
+            Err(e) => results.skipped.push((key.clone(), e.to_string())),
+        }
+        progress.step(before + done + 1, total, &key);
     }
     report::write(&results, out)?;
     Ok(results)

@@ -4,7 +4,7 @@
 use mvgrasp_geometry::{Pose3, Rot3, TriangleMesh, Vec3};
 use mvgrasp_grasp::physics::{
     Drop, FailureStage, PhysicsObject, PhysicsParams, PileParams, ShapeParams, drop_pile,
-    simulate_grasp_among,
+    settle_objects, simulate_grasp_among,
 };
 use mvgrasp_grasp::{Grasp, Gripper};
 use parry3d::shape::Cuboid;
@@ -120,4 +120,18 @@ fn a_bad_setting_or_drop_is_refused_by_name() {
     drops[1].xy[0] = f32::INFINITY;
     let err = drop_pile(&drops, &PileParams::default(), &physics).unwrap_err();
     assert!(err.to_string().contains("drop"), "{err}");
+}
+
+#[test]
+fn a_block_left_on_nothing_comes_down_to_the_table_and_one_off_the_edge_is_taken_away() {
+    let physics = PhysicsParams::default();
+    let pile = PileParams::default();
+    let top = block(Vec3::new(0.03, 0.03, 0.02));
+    // Where it rested on a 4 cm block that a grasp took away; and one beyond the workspace.
+    let floating = Pose3::from_translation(Vec3::new(0.0, 0.0, 0.06));
+    let outside = Pose3::from_translation(Vec3::new(0.2, 0.0, 0.02));
+    let poses = settle_objects(&[(&top, floating), (&top, outside)], &pile, &physics).unwrap();
+    let rested = poses[0].expect("in the workspace");
+    assert!((rested.translation.z - 0.02).abs() < 1.0e-3, "{rested:?}");
+    assert!(poses[1].is_none(), "{:?}", poses[1]);
 }

@@ -151,8 +151,47 @@ pub fn drop_pile(
         wait_for_rest(&mut world, &bodies, pile, pile.object_wait_s);
     }
     world.remove_body(walls);
+    Ok(rest_and_clear(&mut world, bodies, pile))
+}
+
+/// Lets `objects` (each at its pose on the table, as after a grasp took one of them away)
+/// come to rest, and takes away what leaves the workspace square, as [`drop_pile`] ends; each
+/// object's resting pose, or `None` where it was taken away.
+///
+/// # Errors
+/// Invalid `pile` or `physics` settings, a non-finite pose.
+pub fn settle_objects(
+    objects: &[(&PhysicsObject, Pose3)],
+    pile: &PileParams,
+    physics: &PhysicsParams,
+) -> Result<Vec<Option<Pose3>>> {
+    pile.validate()?;
+    physics.validate()?;
+    if let Some((_, pose)) = objects.iter().find(|(_, pose)| !pose.is_finite()) {
+        return Err(GraspError::InvalidParameter {
+            op: "pile",
+            name: "object pose",
+            value: format!("{pose:?}"),
+            expected: "a finite pose",
+        });
+    }
+    let (mut world, _table) = table_world(physics);
+    let bodies = objects
+        .iter()
+        .map(|(object, pose)| Some(insert_object(&mut world, object, pose, physics)))
+        .collect();
+    Ok(rest_and_clear(&mut world, bodies, pile))
+}
+
+/// Waits for rest, takes away what left the workspace, and again until nothing does; each
+/// body's pose, `None` where taken away.
+fn rest_and_clear(
+    world: &mut PhysicsWorld,
+    mut bodies: Vec<Option<RigidBodyHandle>>,
+    pile: &PileParams,
+) -> Vec<Option<Pose3>> {
     loop {
-        wait_for_rest(&mut world, &bodies, pile, pile.final_wait_s);
+        wait_for_rest(world, &bodies, pile, pile.final_wait_s);
         let mut removed = false;
         for slot in &mut bodies {
             let Some(handle) = *slot else { continue };
@@ -172,10 +211,10 @@ pub fn drop_pile(
             break;
         }
     }
-    Ok(bodies
+    bodies
         .iter()
         .map(|slot| slot.and_then(|h| world.bodies.get(h).map(|b| *b.position())))
-        .collect())
+        .collect()
 }
 
 /// The box: a fixed body of four walls standing on the table around the origin.

@@ -1,0 +1,528 @@
+//! The clutter suite: VGN and GIGA's clutter-removal rounds, in mvgrasp's own trial.
+//!
+//! Each round sets up a scene of [`EvalConfig::clutter_objects`] objects drawn at random (with
+//! repeats, as VGN draws) from the evaluation's object sets, and grasps until the table is
+//! empty, two grasps in a row fail, or the planner finds no grasp:
+//!
+//! - **packed**: the first object in its most probable resting pose at the origin, the rest
+//!   around it in steady poses (by probability), turned at random, footprints 5 mm apart within
+//!   10 cm of the first ([`crate::grasp_dataset::clutter::place`]); a scene holds fewer objects
+//!   when the packing finds no room for one.
+//! - **pile**: the objects dropped one by one at random orientations over the middle of a 20 cm
+//!   box, the box taken away, and what leaves the 30 cm workspace taken away with it
+//!   ([`mvgrasp_grasp::physics::drop_pile`]).
+//!
+//! Each grasp is planned on depth rendered from the scene's cameras, without a mask (the
+//! objects are what stands on the fitted table): 1 view is the top-down PhoXi S 0.7 m above
+//! the table, planned by the top-down GQ-CNN alone (`plan --no-fuse` on a depth image); more
+//! views add cameras 50 degrees up around the scene, 0.7 m away, fused by the multi-view
+//! planner (`plan --views-dir`). The grasp is tried in rapier among the others
+//! ([`mvgrasp_grasp::physics::simulate_grasp_among`]) on the object nearest its centre; it
+//! must come out alone. A held object is taken away and the rest settle (and what leaves the
+//! workspace goes, uncleared), as VGN's simulator does; after a failure the scene is as it
+//! was (VGN carries the failed grasp's pushes to the next) and the next attempt samples with
+//! the next seed. When the object does not stay at rest before the hand comes (the trial's
+//! settle) the scene is settled again and the attempt repeated, uncounted; after two such
+//! repeats the object is taken away uncounted: it tests the scene, not the grasp.
+//!
+//! Success rate: held of grasps tried; cleared: held of the objects the scene held (less those
+//! taken away uncounted), as VGN and GIGA report them.
+
+use std::cell::OnceCell;
+use std::rc::Rc;
+
+use mvgrasp_geometry::{Camera, Intrinsics, IntrinsicsPreset, Pose3, Rot3, TriangleMesh, Vec3};
+use mvgrasp_grasp::LabelSettings;
+use mvgrasp_grasp::physics::{
+    Drop, FailureStage, PhysicsObject, PileParams, drop_pile, settle_objects, simulate_grasp_among,
+};
+use mvgrasp_render::Renderer;
+use parry3d::query::PointQuery;
+use rand::{Rng, RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use super::objects::ObjectRef;
+use crate::error::{Error, Result};
+use crate::grasp_dataset::clutter::{ClutterParams, Neighbour, place};
+use crate::planner::{
+    GqcnnPolicy, PlanOptions, Planner, SensorPlanParams, View, models, plan_on_view, plan_on_views,
+};
+use crate::scene::render_depths;
+
+/// The scenes the suite knows.
+pub const SCENES: [&str; 2] = ["packed", "pile"];
+
+/// How a round's objects are set on the table.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ClutterScene {
+    /// Standing in steady poses, packed side by side.
+    Packed,
+    /// Dropped into a box that is then taken away.
+    Pile,
+}
+
+impl ClutterScene {
+    /// Its name in configs and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Packed => "packed",
+            Self::Pile => "pile",
+        }
+    }
+}
+
+impl std::str::FromStr for ClutterScene {
+    type Err = String;
+
+    fn from_str(name: &str) -> std::result::Result<Self, String> {
+        match name {
+            "packed" => Ok(Self::Packed),
+            "pile" => Ok(Self::Pile),
+            _ => Err(format!("{name:?}: expected {}", SCENES.join(" or "))),
+        }
+    }
+}
+
+/// What came of one attempt.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outcome {
+    /// Held through the shake, alone: taken away.
+    Held,
+    /// Failed at this phase of the trial.
+    Failed(String),
+    /// The planner returned no grasp: the round ends.
+    NoGrasp,
+    /// The object nearest the grasp did not stay at rest, twice: taken away uncounted.
+    Unsettled,
+}
+
+/// One attempt of a round.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Attempt {
+    /// The object nearest the grasp's centre (`None` when there was no grasp).
+    pub object: Option<String>,
+    /// Objects on the table before it.
+    pub objects_left: usize,
+    /// The planner's quality of its grasp.
+    pub quality: Option<f32>,
+    /// What came of it.
+    pub outcome: Outcome,
+}
+
+/// One round: its scene and every attempt.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RoundRecord {
+    /// How the objects were set.
+    pub scene: ClutterScene,
+    /// The number of depth views planned on.
+    pub views: usize,
+    /// The round's index (its scene's seed).
+    pub round: usize,
+    /// Objects on the table once the scene was set (a pile's that fell out not counted).
+    pub objects: usize,
+    /// Objects that left the workspace as the others settled after a grasp (not cleared).
+    pub fell_out: usize,
+    /// The attempts, in order.
+    pub attempts: Vec<Attempt>,
+}
+
+impl RoundRecord {
+    /// Grasps tried in the trial.
+    pub fn tried(&self) -> usize {
+        self.attempts
+            .iter()
+            .filter(|a| matches!(a.outcome, Outcome::Held | Outcome::Failed(_)))
+            .count()
+    }
+
+    /// Grasps that held (objects cleared).
+    pub fn held(&self) -> usize {
+        self.count(&Outcome::Held)
+    }
+
+    /// Objects taken away uncounted.
+    pub fn unsettled(&self) -> usize {
+        self.count(&Outcome::Unsettled)
+    }
+
+    fn count(&self, outcome: &Outcome) -> usize {
+        self.attempts
+            .iter()
+            .filter(|a| a.outcome == *outcome)
+            .count()
+    }
+}
+
+/// Times a round settles its scene again for an object that would not stay at rest before one
+/// is taken away uncounted.
+const MAX_RESETTLES: usize = 2;
+
+/// The rounds' cameras: the top-down one first, then `views - 1` around at 50 degrees, all
+/// 0.7 m from the table's centre.
+///
+/// # Errors
+/// None in practice (the cameras are valid by construction); a camera that cannot look.
+pub fn cameras(views: usize) -> Result<Vec<Camera>> {
+    let k = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
+    let distance = 0.7;
+    let mut cameras = vec![Camera::look_at(
+        k,
+        Vec3::new(0.0, 0.0, distance),
+        Vec3::ZERO,
+        Vec3::Y,
+    )?];
+    let elevation = 50.0f32.to_radians();
+    for i in 1..views {
+        let azimuth = std::f32::consts::TAU * (i - 1) as f32 / (views - 1) as f32;
+        let eye = Vec3::new(
+            elevation.cos() * azimuth.cos(),
+            elevation.cos() * azimuth.sin(),
+            elevation.sin(),
+        ) * distance;
+        cameras.push(Camera::look_at(k, eye, Vec3::ZERO, Vec3::Z)?);
+    }
+    Ok(cameras)
+}
+
+/// An object of the pool, built on first use: its mesh, hand-check shape and poses, and its
+/// shapes for the trial.
+struct PoolObject {
+    name: String,
+    built: OnceCell<(Rc<Neighbour>, Rc<PhysicsObject>)>,
+}
+
+/// One object on the table.
+struct OnTable {
+    name: String,
+    shape: Rc<Neighbour>,
+    physics: Rc<PhysicsObject>,
+    pose: Pose3,
+}
+
+/// The suite's planners, cameras and object pool, built once per evaluation.
+pub struct ClutterSuite {
+    pool: Vec<(ObjectRef, PoolObject)>,
+    labels: LabelSettings,
+    topdown: Planner,
+    fused: Option<(Planner, SensorPlanParams)>,
+}
+
+impl ClutterSuite {
+    /// The suite over `objects`, loading the shipped top-down GQ-CNN and, when some view
+    /// count is above 1, the multi-view one.
+    ///
+    /// # Errors
+    /// No objects, or a network that cannot load.
+    pub fn new(objects: &[ObjectRef], views: &[usize]) -> Result<Self> {
+        if objects.is_empty() {
+            return Err(Error::Evaluate {
+                problem: "the clutter suite has no objects to draw from".into(),
+            });
+        }
+        let labels = LabelSettings::default();
+        let topdown = Planner::from(GqcnnPolicy::new(
+            models::GQCNN_TOPDOWN.load()?,
+            labels.gripper.max_opening_m,
+        )?);
+        let fused = if views.iter().any(|&n| n > 1) {
+            let options = PlanOptions {
+                fuse: true,
+                ..PlanOptions::default()
+            };
+            let (planner, _, params) = options.on_depth(models::MVGQCNN.load()?)?;
+            Some((planner, params))
+        } else {
+            None
+        };
+        Ok(Self {
+            pool: objects
+                .iter()
+                .map(|o| {
+                    let entry = PoolObject {
+                        name: format!("{}|{}", o.set, o.name),
+                        built: OnceCell::new(),
+                    };
+                    (o.clone(), entry)
+                })
+                .collect(),
+            labels,
+            topdown,
+            fused,
+        })
+    }
+
+    /// The pool's object `i`, built on first use.
+    fn object(&self, i: usize) -> Result<(String, Rc<Neighbour>, Rc<PhysicsObject>)> {
+        let (object, entry) = &self.pool[i];
+        if entry.built.get().is_none() {
+            let neighbour = Neighbour::new(object.load()?).map_err(|e| Error::Evaluate {
+                problem: format!("{}: {e}", entry.name),
+            })?;
+            let physics =
+                PhysicsObject::from_grasp_object(neighbour.object(), &self.labels.physics_shape)?;
+            let _ = entry.built.set((Rc::new(neighbour), Rc::new(physics)));
+        }
+        let (shape, physics) =
+            entry
+                .built
+                .get()
+                .ok_or("unbuilt object")
+                .map_err(|e| Error::Evaluate {
+                    problem: e.to_string(),
+                })?;
+        Ok((entry.name.clone(), Rc::clone(shape), Rc::clone(physics)))
+    }
+
+    /// Runs round `round` of `scene` with `count` objects, planned on `views` depth views.
+    ///
+    /// # Errors
+    /// An object that cannot be built, a render or a trial that fails.
+    pub fn round(
+        &self,
+        renderer: &Renderer,
+        scene: ClutterScene,
+        views: usize,
+        count: usize,
+        round: usize,
+    ) -> Result<RoundRecord> {
+        let salt = match scene {
+            ClutterScene::Packed => 0,
+            ClutterScene::Pile => 0x5eed,
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(salt ^ (round as u64).wrapping_mul(0x9e37));
+        let drawn: Vec<usize> = (0..count)
+            .map(|_| rng.random_range(0..self.pool.len()))
+            .collect();
+        let mut table = match scene {
+            ClutterScene::Packed => self.pack(&drawn, &mut rng)?,
+            ClutterScene::Pile => self.pile(&drawn, &mut rng)?,
+        };
+        let cameras = cameras(views)?;
+        let pile = PileParams::default();
+        let physics = &self.labels.physics;
+        let gripper = &self.labels.gripper;
+        let mut record = RoundRecord {
+            scene,
+            views,
+            round,
+            objects: table.len(),
+            fell_out: 0,
+            attempts: Vec::new(),
+        };
+        let (mut failures_in_a_row, mut seed, mut resettles) = (0, 0u64, 0);
+        while !table.is_empty() && failures_in_a_row < 2 {
+            let objects_left = table.len();
+            let Some((quality, grasp)) = self.plan(renderer, &table, &cameras, seed)? else {
+                record.attempts.push(Attempt {
+                    object: None,
+                    objects_left,
+                    quality: None,
+                    outcome: Outcome::NoGrasp,
+                });
+                break;
+            };
+            // Each attempt samples anew (after a failure the scene is as before).
+            seed += 1;
+            let target = nearest(&table, grasp.center());
+            let others: Vec<(&PhysicsObject, Pose3)> = table
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| *i != target)
+                .map(|(_, o)| (o.physics.as_ref(), o.pose))
+                .collect();
+            let trial = simulate_grasp_among(
+                &table[target].physics,
+                &table[target].pose,
+                &others,
+                &grasp,
+                gripper,
+                physics,
+            )?;
+            let mut attempt = Attempt {
+                object: Some(table[target].name.clone()),
+                objects_left,
+                quality: Some(quality),
+                outcome: Outcome::Held,
+            };
+            match trial.failed_at {
+                Some(FailureStage::Settle) if resettles < MAX_RESETTLES => {
+                    // Settle the scene and try again, uncounted.
+                    resettles += 1;
+                    record.fell_out += self.settle(&mut table, &pile)?;
+                    continue;
+                }
+                Some(FailureStage::Settle) => {
+                    attempt.outcome = Outcome::Unsettled;
+                    resettles = 0;
+                    table.remove(target);
+                    record.fell_out += self.settle(&mut table, &pile)?;
+                }
+                Some(stage) => {
+                    attempt.outcome = Outcome::Failed(stage.name().to_string());
+                    failures_in_a_row += 1;
+                }
+                None => {
+                    table.remove(target);
+                    record.fell_out += self.settle(&mut table, &pile)?;
+                    failures_in_a_row = 0;
+                }
+            }
+            record.attempts.push(attempt);
+        }
+        Ok(record)
+    }
+
+    /// The best grasp planned on `table` seen from `cameras`, and its quality.
+    fn plan(
+        &self,
+        renderer: &Renderer,
+        table: &[OnTable],
+        cameras: &[Camera],
+        seed: u64,
+    ) -> Result<Option<(f32, mvgrasp_grasp::Grasp)>> {
+        let parts: Vec<TriangleMesh> = table
+            .iter()
+            .map(|o| o.shape.mesh().transformed(&o.pose))
+            .collect();
+        let merged = TriangleMesh::concatenate(&parts, parts[0].origin())?;
+        let depths = render_depths(renderer, &merged, &Pose3::IDENTITY, cameras)?;
+        let views: Vec<View> = cameras
+            .iter()
+            .zip(depths)
+            .map(|(camera, depth)| View {
+                camera: *camera,
+                depth,
+                mask: None,
+            })
+            .collect();
+        let gripper = &self.labels.gripper;
+        // A plan that finds nothing (no table, no candidate) is the round's end, as VGN's
+        // "no grasp detected".
+        let best = match (&self.fused, views.len()) {
+            (Some((planner, params)), n) if n > 1 => {
+                let params = SensorPlanParams {
+                    seed,
+                    ..params.clone()
+                };
+                plan_on_views(planner, gripper, views, &params)
+                    .ok()
+                    .and_then(|r| r.best)
+            }
+            _ => {
+                let params = SensorPlanParams {
+                    seed,
+                    ..SensorPlanParams::default()
+                };
+                let view = views.into_iter().next().ok_or(Error::Evaluate {
+                    problem: "a clutter round with no view".into(),
+                })?;
+                plan_on_view(&self.topdown, gripper, view, true, &params)
+                    .ok()
+                    .and_then(|r| r.best)
+            }
+        };
+        Ok(best.map(|b| (b.quality, b.grasp)))
+    }
+
+    /// `drawn` packed on the table: the first at the origin in its most probable resting pose,
+    /// the rest around it.
+    fn pack(&self, drawn: &[usize], rng: &mut ChaCha8Rng) -> Result<Vec<OnTable>> {
+        let objects: Vec<_> = drawn
+            .iter()
+            .map(|&i| self.object(i))
+            .collect::<Result<_>>()?;
+        let shapes: Vec<Rc<Neighbour>> = objects.iter().map(|(_, s, _)| Rc::clone(s)).collect();
+        let first_pose = shapes[0].most_probable_pose();
+        let others = drawn.len() - 1;
+        let params = ClutterParams {
+            neighbours: [others, others],
+            spread_m: 0.1,
+            gap_m: 0.005,
+            tries: 50,
+        };
+        let mut poses = vec![(0, first_pose)];
+        for p in place(shapes[0].mesh(), &first_pose, &shapes[1..], &params, rng) {
+            poses.push((p.index + 1, p.table_from_neighbour));
+        }
+        Ok(poses
+            .into_iter()
+            .map(|(i, pose)| on_table(&objects[i], pose))
+            .collect())
+    }
+
+    /// `drawn` dropped into a box at random orientations, over its middle 10 cm.
+    fn pile(&self, drawn: &[usize], rng: &mut ChaCha8Rng) -> Result<Vec<OnTable>> {
+        let objects: Vec<_> = drawn
+            .iter()
+            .map(|&i| self.object(i))
+            .collect::<Result<_>>()?;
+        let drops: Vec<Drop<'_>> = objects
+            .iter()
+            .map(|(_, _, physics)| Drop {
+                object: physics,
+                rotation: random_rotation(rng),
+                xy: [rng.random_range(-0.05..0.05), rng.random_range(-0.05..0.05)],
+            })
+            .collect();
+        let rested = drop_pile(&drops, &PileParams::default(), &self.labels.physics)?;
+        Ok(objects
+            .iter()
+            .zip(rested)
+            .filter_map(|(object, pose)| Some(on_table(object, pose?)))
+            .collect())
+    }
+
+    /// Lets `table` rest (after an object was taken away); the number that left the workspace.
+    fn settle(&self, table: &mut Vec<OnTable>, pile: &PileParams) -> Result<usize> {
+        let objects: Vec<(&PhysicsObject, Pose3)> =
+            table.iter().map(|o| (o.physics.as_ref(), o.pose)).collect();
+        let rested = settle_objects(&objects, pile, &self.labels.physics)?;
+        let before = table.len();
+        let mut kept = Vec::with_capacity(before);
+        for (object, pose) in table.drain(..).zip(rested) {
+            if let Some(pose) = pose {
+                kept.push(OnTable { pose, ..object });
+            }
+        }
+        *table = kept;
+        Ok(before - table.len())
+    }
+}
+
+fn on_table(object: &(String, Rc<Neighbour>, Rc<PhysicsObject>), pose: Pose3) -> OnTable {
+    OnTable {
+        name: object.0.clone(),
+        shape: Rc::clone(&object.1),
+        physics: Rc::clone(&object.2),
+        pose,
+    }
+}
+
+/// A rotation drawn uniformly (Shoemake's subgroup algorithm).
+fn random_rotation(rng: &mut impl Rng) -> Rot3 {
+    let (u1, u2, u3): (f32, f32, f32) = (
+        rng.random_range(0.0..1.0),
+        rng.random_range(0.0..std::f32::consts::TAU),
+        rng.random_range(0.0..std::f32::consts::TAU),
+    );
+    let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
+    Rot3::from_xyzw(a * u2.sin(), a * u2.cos(), b * u3.sin(), b * u3.cos()).normalize()
+}
+
+/// The object of `table` whose surface is nearest `point` (world frame).
+fn nearest(table: &[OnTable], point: Vec3) -> usize {
+    let distance = |o: &OnTable| {
+        let local = o.pose.inverse_transform_point(point);
+        o.shape
+            .object()
+            .caster()
+            .trimesh()
+            .distance_to_local_point(local, true)
+    };
+    (0..table.len())
+        .min_by(|&a, &b| distance(&table[a]).total_cmp(&distance(&table[b])))
+        .unwrap_or(0)
+}
