@@ -144,9 +144,17 @@ fn a_folder_of_another_runs_settings_and_an_unknown_policy_are_refused_by_name()
         "{message}"
     );
     for (flag, value, expected) in [
-        ("--clutter-scene", "bin", "clutter scene \"bin\": expected packed or pile"),
+        (
+            "--clutter-scene",
+            "bin",
+            "clutter scene \"bin\": expected packed or pile",
+        ),
         ("--clutter-views", "0", "clutter views 0: expected 1 to 9"),
-        ("--clutter-objects", "0", "clutter objects 0: a round needs at least one"),
+        (
+            "--clutter-objects",
+            "0",
+            "clutter objects 0: a round needs at least one",
+        ),
     ] {
         // Two share a folder: a refused run writes no settings there.
         let refused = run(&[

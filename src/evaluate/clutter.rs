@@ -110,6 +110,11 @@ pub struct Attempt {
     pub quality: Option<f32>,
     /// What came of it.
     pub outcome: Outcome,
+    /// How far the object's centre of mass had risen when the trial ended, metres (`None`
+    /// without a trial): on a failure after the close, whether the object itself came up (a
+    /// neighbour that came with it failed the phase) or slipped out.
+    #[serde(default)]
+    pub lift_m: Option<f32>,
 }
 
 /// One round: its scene and every attempt.
@@ -191,8 +196,11 @@ pub fn cameras(views: usize) -> Result<Vec<Camera>> {
 /// shapes for the trial.
 struct PoolObject {
     name: String,
-    built: OnceCell<(Rc<Neighbour>, Rc<PhysicsObject>)>,
+    built: OnceCell<Result<(Rc<Neighbour>, Rc<PhysicsObject>)>>,
 }
+
+/// An object drawn for a round: its name, its mesh and hand-check shape, its trial shapes.
+type Drawn = (String, Rc<Neighbour>, Rc<PhysicsObject>);
 
 /// One object on the table.
 struct OnTable {
@@ -254,26 +262,49 @@ impl ClutterSuite {
         })
     }
 
-    /// The pool's object `i`, built on first use.
-    fn object(&self, i: usize) -> Result<(String, Rc<Neighbour>, Rc<PhysicsObject>)> {
+    /// The pool's object `i`, built on first use; `None` when it cannot be (a mesh the grasp
+    /// analysis refuses: it is never drawn).
+    fn object(&self, i: usize) -> Option<Drawn> {
         let (object, entry) = &self.pool[i];
-        if entry.built.get().is_none() {
-            let neighbour = Neighbour::new(object.load()?).map_err(|e| Error::Evaluate {
-                problem: format!("{}: {e}", entry.name),
-            })?;
+        let built = entry.built.get_or_init(|| {
+            let neighbour = Neighbour::new(object.load()?)?;
             let physics =
                 PhysicsObject::from_grasp_object(neighbour.object(), &self.labels.physics_shape)?;
-            let _ = entry.built.set((Rc::new(neighbour), Rc::new(physics)));
+            Ok((Rc::new(neighbour), Rc::new(physics)))
+        });
+        let (shape, physics) = built.as_ref().ok()?;
+        Some((entry.name.clone(), Rc::clone(shape), Rc::clone(physics)))
+    }
+
+    /// The objects of the pool that could not be built so far, and why.
+    pub fn unusable(&self) -> Vec<(String, String)> {
+        self.pool
+            .iter()
+            .filter_map(|(_, entry)| match entry.built.get() {
+                Some(Err(e)) => Some((entry.name.clone(), e.to_string())),
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// `count` objects drawn at random with repeats; one that cannot be built is drawn again.
+    fn draw(&self, count: usize, rng: &mut ChaCha8Rng) -> Result<Vec<Drawn>> {
+        let mut drawn = Vec::with_capacity(count);
+        while drawn.len() < count {
+            if self
+                .pool
+                .iter()
+                .all(|(_, e)| matches!(e.built.get(), Some(Err(_))))
+            {
+                return Err(Error::Evaluate {
+                    problem: "no object of the clutter suite's sets can be used".into(),
+                });
+            }
+            if let Some(object) = self.object(rng.random_range(0..self.pool.len())) {
+                drawn.push(object);
+            }
         }
-        let (shape, physics) =
-            entry
-                .built
-                .get()
-                .ok_or("unbuilt object")
-                .map_err(|e| Error::Evaluate {
-                    problem: e.to_string(),
-                })?;
-        Ok((entry.name.clone(), Rc::clone(shape), Rc::clone(physics)))
+        Ok(drawn)
     }
 
     /// Runs round `round` of `scene` with `count` objects, planned on `views` depth views.
@@ -293,9 +324,7 @@ impl ClutterSuite {
             ClutterScene::Pile => 0x5eed,
         };
         let mut rng = ChaCha8Rng::seed_from_u64(salt ^ (round as u64).wrapping_mul(0x9e37));
-        let drawn: Vec<usize> = (0..count)
-            .map(|_| rng.random_range(0..self.pool.len()))
-            .collect();
+        let drawn = self.draw(count, &mut rng)?;
         let mut table = match scene {
             ClutterScene::Packed => self.pack(&drawn, &mut rng)?,
             ClutterScene::Pile => self.pile(&drawn, &mut rng)?,
@@ -321,6 +350,7 @@ impl ClutterSuite {
                     objects_left,
                     quality: None,
                     outcome: Outcome::NoGrasp,
+                    lift_m: None,
                 });
                 break;
             };
@@ -346,6 +376,7 @@ impl ClutterSuite {
                 objects_left,
                 quality: Some(quality),
                 outcome: Outcome::Held,
+                lift_m: Some(trial.object_lift_m),
             };
             match trial.failed_at {
                 Some(FailureStage::Settle) if resettles < MAX_RESETTLES => {
@@ -429,14 +460,10 @@ impl ClutterSuite {
 
     /// `drawn` packed on the table: the first at the origin in its most probable resting pose,
     /// the rest around it.
-    fn pack(&self, drawn: &[usize], rng: &mut ChaCha8Rng) -> Result<Vec<OnTable>> {
-        let objects: Vec<_> = drawn
-            .iter()
-            .map(|&i| self.object(i))
-            .collect::<Result<_>>()?;
+    fn pack(&self, objects: &[Drawn], rng: &mut ChaCha8Rng) -> Result<Vec<OnTable>> {
         let shapes: Vec<Rc<Neighbour>> = objects.iter().map(|(_, s, _)| Rc::clone(s)).collect();
         let first_pose = shapes[0].most_probable_pose();
-        let others = drawn.len() - 1;
+        let others = objects.len() - 1;
         let params = ClutterParams {
             neighbours: [others, others],
             spread_m: 0.1,
@@ -454,11 +481,7 @@ impl ClutterSuite {
     }
 
     /// `drawn` dropped into a box at random orientations, over its middle 10 cm.
-    fn pile(&self, drawn: &[usize], rng: &mut ChaCha8Rng) -> Result<Vec<OnTable>> {
-        let objects: Vec<_> = drawn
-            .iter()
-            .map(|&i| self.object(i))
-            .collect::<Result<_>>()?;
+    fn pile(&self, objects: &[Drawn], rng: &mut ChaCha8Rng) -> Result<Vec<OnTable>> {
         let drops: Vec<Drop<'_>> = objects
             .iter()
             .map(|(_, _, physics)| Drop {
@@ -492,7 +515,7 @@ impl ClutterSuite {
     }
 }
 
-fn on_table(object: &(String, Rc<Neighbour>, Rc<PhysicsObject>), pose: Pose3) -> OnTable {
+fn on_table(object: &Drawn, pose: Pose3) -> OnTable {
     OnTable {
         name: object.0.clone(),
         shape: Rc::clone(&object.1),

@@ -342,6 +342,14 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
         }
         progress.step(before + done + 1, total, &key);
     }
+    if let Some(suite) = &suite {
+        results.skipped.extend(
+            suite
+                .unusable()
+                .into_iter()
+                .map(|(name, why)| (format!("clutter|{name}"), why)),
+        );
+    }
     report::write(&results, out)?;
     Ok(results)
 }
