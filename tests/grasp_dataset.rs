@@ -8,9 +8,9 @@ use common::renderer;
 use std::path::Path;
 use std::process::Command;
 
-use mvgrasp::convert::pose_from_row_major;
 use mvgrasp::dataset::ObjectSource;
 use mvgrasp::geometry::objects::{Category, ObjectSpec, generate as generate_object};
+use mvgrasp::geometry::pose_as_matrix::from_rows;
 use mvgrasp::geometry::{Camera, Vec3};
 use mvgrasp::grasp::quality::{find_contacts, robust_quality};
 use mvgrasp::grasp::{GraspObject, canonical_frame, check_collision};
@@ -198,11 +198,11 @@ fn crops_are_centred_on_the_grasp_with_its_axis_along_the_rows_and_labels_recomp
     let intrinsics = config.intrinsics().unwrap();
     let mut checked_contacts = 0;
     for i in (0..n).step_by((n / 12).max(1)) {
-        let grasp = pose_from_row_major(&matrix(&object_from_gripper, i));
-        let table = pose_from_row_major(&matrix(&table_from_object, i));
+        let grasp = from_rows(matrix(&object_from_gripper, i)).unwrap();
+        let table = from_rows(matrix(&table_from_object, i)).unwrap();
         let camera = Camera {
             intrinsics,
-            world_from_camera: pose_from_row_major(&matrix(&world_from_camera, i)),
+            world_from_camera: from_rows(matrix(&world_from_camera, i)).unwrap(),
         };
         let center = [center_px[2 * i], center_px[2 * i + 1]];
         let params = config.crop;

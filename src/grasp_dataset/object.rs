@@ -21,10 +21,10 @@ use super::clutter::{Neighbour, hits_a_neighbour, place, scene_mesh};
 use super::config::GraspDatasetConfig;
 use super::noise::add_depth_noise;
 use super::shard::Datapoint;
-use crate::convert::row_major;
 use crate::dataset::splitmix;
 use crate::error::Result;
 use crate::scene::render_depths;
+use mvgrasp_geometry::pose_as_matrix::to_rows;
 
 /// What the generator resolved from the config once.
 pub(crate) struct Resolved {
@@ -194,9 +194,9 @@ pub(crate) fn object_datapoints(
                     view: view as u32,
                     grasp: grasp_index as u32,
                     quality_seed: quality_seed(object_seed, pose_index, grasp_index),
-                    object_from_gripper: row_major(&object_from_gripper),
-                    table_from_object: row_major(&table_from_object),
-                    world_from_camera: row_major(&camera.world_from_camera),
+                    object_from_gripper: to_rows(&object_from_gripper),
+                    table_from_object: to_rows(&table_from_object),
+                    world_from_camera: to_rows(&camera.world_from_camera),
                 });
             }
         }
@@ -272,7 +272,16 @@ fn run_physics(
         .par_iter()
         .map(|&i| {
             let p = &points[i];
-            let object_from_gripper = crate::convert::pose_from_row_major(&p.object_from_gripper);
+            // The rows were written from a rigid pose a few lines above.
+            let object_from_gripper = mvgrasp_geometry::pose_as_matrix::from_rows(
+                p.object_from_gripper,
+            )
+            .map_err(|_| mvgrasp_grasp::GraspError::InvalidParameter {
+                op: "physics labels",
+                name: "object_from_gripper",
+                value: format!("{:?}", p.object_from_gripper),
+                expected: "a rigid transform",
+            })?;
             let grasp = Grasp {
                 world_from_gripper: *table_from_object * object_from_gripper,
                 width_m: p.width_m,

@@ -1,6 +1,7 @@
 //! The one place where geometry's types become the renderer's plain arrays.
 
-use mvgrasp_geometry::{Camera, Intrinsics, Mat3, Pose3, Rot3, TriangleMesh, Vec3};
+use mvgrasp_geometry::pose_as_matrix::to_rows;
+use mvgrasp_geometry::{Camera, Intrinsics, TriangleMesh};
 use mvgrasp_render::{Frame, Intrinsics as RenderIntrinsics, Sides, View};
 
 use crate::stereo::RgbView;
@@ -21,22 +22,6 @@ pub fn sides_of(mesh: &TriangleMesh) -> Sides {
     }
 }
 
-/// A pose as the row-major 4x4 matrix the renderer takes
-/// ([`mvgrasp_geometry::pose_as_matrix::to_rows`], as files write it).
-pub fn row_major(pose: &Pose3) -> [[f32; 4]; 4] {
-    mvgrasp_geometry::pose_as_matrix::to_rows(pose)
-}
-
-/// The rigid pose of a row-major 4x4 matrix (the inverse of [`row_major`]; the bottom row is
-/// not read).
-pub fn pose_from_row_major(m: &[[f32; 4]; 4]) -> Pose3 {
-    let column = |j: usize| Vec3::new(m[0][j], m[1][j], m[2][j]);
-    Pose3::from_parts(
-        column(3),
-        Rot3::from_mat3(&Mat3::from_cols(column(0), column(1), column(2))),
-    )
-}
-
 /// The renderer's copy of the intrinsics (same fields).
 pub fn render_intrinsics(k: &Intrinsics) -> RenderIntrinsics {
     RenderIntrinsics {
@@ -55,7 +40,7 @@ pub fn render_intrinsics(k: &Intrinsics) -> RenderIntrinsics {
 pub fn render_view(camera: &Camera) -> View {
     View {
         intrinsics: render_intrinsics(&camera.intrinsics),
-        camera_from_world: row_major(&camera.camera_from_world()),
+        camera_from_world: to_rows(&camera.camera_from_world()),
     }
 }
 

@@ -9,9 +9,10 @@ use mvgrasp_grasp::{Grasp, Gripper};
 use mvgrasp_render::{Backend, Colors, IDENTITY, Material, MeshInput, Renderer, Sides};
 use parry3d::shape::Cuboid;
 
-use crate::convert::{render_view, row_major, sides_of};
+use crate::convert::{render_view, sides_of};
 use crate::error::Result;
 use crate::images::write_png8;
+use mvgrasp_geometry::pose_as_matrix::to_rows;
 
 /// Colours of the grasps, best first: green, blue, orange, purple, cyan, then grey.
 pub const GRASP_COLORS: [[u8; 3]; 5] = [
@@ -87,7 +88,7 @@ pub fn write_colored_grasp_picture(
             indices: mesh.triangles(),
             sides: sides_of(mesh),
             colors: Colors::Uniform(OBJECT_RGB),
-            world_from_mesh: row_major(table_from_object),
+            world_from_mesh: to_rows(table_from_object),
             instance_id: 1,
             material: Material::MATTE,
         },

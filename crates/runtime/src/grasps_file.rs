@@ -18,11 +18,11 @@ use mvgrasp_geometry::Camera;
 use mvgrasp_planner::{DepthImage, Rejections, ScoredGrasp, TableFit};
 use serde::Serialize;
 
-use crate::convert::row_major;
 use crate::error::{Error, Result};
 use crate::grasp_image::GRASP_COLORS;
 use crate::images::write_png8;
 use crate::planner::{PlanReport, SensorPlanReport, ViewsPlanReport};
+use mvgrasp_geometry::pose_as_matrix::to_rows;
 
 /// The `format` of `grasps.json`.
 pub const GRASPS_FORMAT: &str = "mvgrasp-grasps/1";
@@ -119,7 +119,7 @@ impl GraspsFile {
                 let k = &c.intrinsics;
                 ViewEntry {
                     intrinsics: [k.fx, k.fy, k.cx, k.cy, k.width as f32, k.height as f32],
-                    world_from_camera: row_major(&c.world_from_camera),
+                    world_from_camera: to_rows(&c.world_from_camera),
                 }
             })
             .collect();
@@ -143,8 +143,8 @@ impl GraspsFile {
                     v: g.image.center_px[1],
                     angle_rad: g.image.angle_rad,
                     depth_m: g.image.depth_m,
-                    camera_from_gripper: row_major(&camera_from_gripper),
-                    world_from_gripper: row_major(&g.grasp.world_from_gripper),
+                    camera_from_gripper: to_rows(&camera_from_gripper),
+                    world_from_gripper: to_rows(&g.grasp.world_from_gripper),
                     p: g.grasp.center().to_array(),
                     phi_rad: paper.phi_rad,
                     theta_rad: paper.theta_rad,

@@ -9,8 +9,9 @@ use mvgrasp_geometry::{Camera, Pose3, TriangleMesh};
 use mvgrasp_planner::DepthImage;
 use mvgrasp_render::{Colors, Frame, IDENTITY, Lighting, Material, MeshInput, Renderer, Sides};
 
-use crate::convert::{render_view, row_major, sides_of};
+use crate::convert::{render_view, sides_of};
 use crate::error::Result;
+use mvgrasp_geometry::pose_as_matrix::to_rows;
 
 /// Mask value of the object.
 pub const OBJECT_ID: u8 = 1;
@@ -43,7 +44,7 @@ impl SceneData {
         let h = table_half_side_m;
         Self {
             positions: mesh.vertices().iter().map(|v| v.to_array()).collect(),
-            world_from_object: row_major(table_from_object),
+            world_from_object: to_rows(table_from_object),
             sides: sides_of(mesh),
             table_positions: [[-h, -h, 0.0], [h, -h, 0.0], [h, h, 0.0], [-h, h, 0.0]],
         }
