@@ -15,7 +15,7 @@ impl Progress for Quiet {
 
 /// Two small built-in objects as mesh files in `dir/meshes`, and a config that plans on them
 /// with the depth planner, two seeds and the exhaustive search, predicts their depth from
-/// 1 and 2 views, and clears a packed and a pile scene of two of them from one view.
+/// 1 and 2 views, and clears a packed, a pile and a bin scene of two of them from one view.
 fn two_objects(dir: &Path) -> EvalConfig {
     let meshes = dir.join("meshes");
     std::fs::create_dir_all(&meshes).unwrap();
@@ -35,7 +35,7 @@ fn two_objects(dir: &Path) -> EvalConfig {
         suites: vec!["grasps".into(), "depth".into(), "clutter".into()],
         depth_views: vec![1, 2],
         depth_distance_m: 0.5,
-        clutter_scenes: vec!["packed".into(), "pile".into()],
+        clutter_scenes: vec!["packed".into(), "pile".into(), "bin".into()],
         clutter_views: vec![1],
         clutter_rounds: 1,
         clutter_objects: 2,
@@ -90,10 +90,10 @@ fn a_run_interrupted_and_resumed_writes_the_same_bytes_as_one_that_was_not() {
     let lines: Vec<&str> = records.lines().collect();
     assert_eq!(
         lines.len(),
-        2 * (1 + 2 + 1) + 2,
+        2 * (1 + 2 + 1) + 3,
         "per object: its poses, a grasp per seed, its depth; a round per clutter scene"
     );
-    assert_eq!(results.clutter.len(), 2, "{:?}", results.skipped);
+    assert_eq!(results.clutter.len(), 3, "{:?}", results.skipped);
     assert!(
         results.clutter.iter().all(|r| !r.attempts.is_empty()),
         "{:?}",
@@ -146,8 +146,8 @@ fn a_folder_of_another_runs_settings_and_an_unknown_policy_are_refused_by_name()
     for (flag, value, expected) in [
         (
             "--clutter-scene",
-            "bin",
-            "clutter scene \"bin\": expected packed or pile",
+            "tote",
+            "clutter scene \"tote\": expected one of packed, pile, bin",
         ),
         ("--clutter-views", "0", "clutter views 0: expected 1 to 9"),
         (

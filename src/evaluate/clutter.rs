@@ -34,7 +34,8 @@ use std::rc::Rc;
 use mvgrasp_geometry::{Camera, Intrinsics, IntrinsicsPreset, Pose3, Rot3, TriangleMesh, Vec3};
 use mvgrasp_grasp::LabelSettings;
 use mvgrasp_grasp::physics::{
-    Drop, FailureStage, PhysicsObject, PileParams, drop_pile, settle_objects, simulate_grasp_among,
+    Drop, FailureStage, PhysicsObject, PileParams, box_walls, drop_pile, settle_objects,
+    simulate_grasp_in_scene,
 };
 use mvgrasp_render::Renderer;
 use parry3d::query::PointQuery;
@@ -46,12 +47,13 @@ use super::objects::ObjectRef;
 use crate::error::{Error, Result};
 use crate::grasp_dataset::clutter::{ClutterParams, Neighbour, place};
 use crate::planner::{
-    GqcnnPolicy, PlanOptions, Planner, SensorPlanParams, View, models, plan_on_view, plan_on_views,
+    DepthImage, GqcnnPolicy, Mask, PlanOptions, Planner, SensorPlanParams, View, models,
+    plan_on_view, plan_on_views,
 };
 use crate::scene::render_depths;
 
 /// The scenes the suite knows.
-pub const SCENES: [&str; 2] = ["packed", "pile"];
+pub const SCENES: [&str; 3] = ["packed", "pile", "bin"];
 
 /// How a round's objects are set on the table.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
@@ -61,6 +63,8 @@ pub enum ClutterScene {
     Packed,
     /// Dropped into a box that is then taken away.
     Pile,
+    /// Dropped into a bin that stays: its walls are seen and are obstacles of the trial.
+    Bin,
 }
 
 impl ClutterScene {
@@ -69,6 +73,22 @@ impl ClutterScene {
         match self {
             Self::Packed => "packed",
             Self::Pile => "pile",
+            Self::Bin => "bin",
+        }
+    }
+
+    /// How its objects are dropped and settle (the packed scene settles as a pile does).
+    fn pile_params(self) -> PileParams {
+        match self {
+            Self::Packed | Self::Pile => PileParams::default(),
+            // A tote 30 cm square inside, 8 cm deep.
+            Self::Bin => PileParams {
+                box_half_side_m: 0.15,
+                box_height_m: 0.08,
+                workspace_half_side_m: 0.2,
+                keep_box: true,
+                ..PileParams::default()
+            },
         }
     }
 }
@@ -80,7 +100,8 @@ impl std::str::FromStr for ClutterScene {
         match name {
             "packed" => Ok(Self::Packed),
             "pile" => Ok(Self::Pile),
-            _ => Err(format!("{name:?}: expected {}", SCENES.join(" or "))),
+            "bin" => Ok(Self::Bin),
+            _ => Err(format!("{name:?}: expected one of {}", SCENES.join(", "))),
         }
     }
 }
@@ -216,6 +237,8 @@ pub struct ClutterSuite {
     labels: LabelSettings,
     topdown: Planner,
     fused: Option<(Planner, SensorPlanParams)>,
+    /// The bin's walls: each one's mesh where it stands and its trial shape.
+    walls: Vec<(TriangleMesh, PhysicsObject)>,
 }
 
 impl ClutterSuite {
@@ -245,7 +268,17 @@ impl ClutterSuite {
         } else {
             None
         };
+        let walls = box_walls(&ClutterScene::Bin.pile_params())
+            .into_iter()
+            .map(|(half, centre)| {
+                let (vertices, triangles) = parry3d::shape::Cuboid::new(half).to_trimesh();
+                let mesh = TriangleMesh::new(vertices, triangles)?;
+                let physics = PhysicsObject::new(&mesh, &labels.physics_shape)?;
+                Ok((mesh.transformed(&Pose3::from_translation(centre)), physics))
+            })
+            .collect::<Result<_>>()?;
         Ok(Self {
+            walls,
             pool: objects
                 .iter()
                 .map(|o| {
@@ -322,15 +355,26 @@ impl ClutterSuite {
         let salt = match scene {
             ClutterScene::Packed => 0,
             ClutterScene::Pile => 0x5eed,
+            ClutterScene::Bin => 0xb1,
         };
         let mut rng = ChaCha8Rng::seed_from_u64(salt ^ (round as u64).wrapping_mul(0x9e37));
         let drawn = self.draw(count, &mut rng)?;
         let mut table = match scene {
             ClutterScene::Packed => self.pack(&drawn, &mut rng)?,
-            ClutterScene::Pile => self.pile(&drawn, &mut rng)?,
+            ClutterScene::Pile | ClutterScene::Bin => self.pile(&drawn, scene, &mut rng)?,
         };
         let cameras = cameras(views)?;
-        let pile = PileParams::default();
+        let pile = scene.pile_params();
+        // The walls stand in the trial where the meshes were (their shapes are centred).
+        let fixed: Vec<(&PhysicsObject, Pose3)> = if scene == ClutterScene::Bin {
+            box_walls(&pile)
+                .iter()
+                .zip(&self.walls)
+                .map(|((_, centre), (_, physics))| (physics, Pose3::from_translation(*centre)))
+                .collect()
+        } else {
+            Vec::new()
+        };
         let physics = &self.labels.physics;
         let gripper = &self.labels.gripper;
         let mut record = RoundRecord {
@@ -344,7 +388,9 @@ impl ClutterSuite {
         let (mut failures_in_a_row, mut seed, mut resettles) = (0, 0u64, 0);
         while !table.is_empty() && failures_in_a_row < 2 {
             let objects_left = table.len();
-            let Some((quality, grasp)) = self.plan(renderer, &table, &cameras, seed)? else {
+            let Some((quality, grasp)) =
+                self.plan(renderer, &table, !fixed.is_empty(), &cameras, seed)?
+            else {
                 record.attempts.push(Attempt {
                     object: None,
                     objects_left,
@@ -363,10 +409,11 @@ impl ClutterSuite {
                 .filter(|(i, _)| *i != target)
                 .map(|(_, o)| (o.physics.as_ref(), o.pose))
                 .collect();
-            let trial = simulate_grasp_among(
+            let trial = simulate_grasp_in_scene(
                 &table[target].physics,
                 &table[target].pose,
                 &others,
+                &fixed,
                 &grasp,
                 gripper,
                 physics,
@@ -406,29 +453,44 @@ impl ClutterSuite {
         Ok(record)
     }
 
-    /// The best grasp planned on `table` seen from `cameras`, and its quality.
+    /// The best grasp planned on `table` (in the bin, with `walls`) seen from `cameras`, and
+    /// its quality.
     fn plan(
         &self,
         renderer: &Renderer,
         table: &[OnTable],
+        walls: bool,
         cameras: &[Camera],
         seed: u64,
     ) -> Result<Option<(f32, mvgrasp_grasp::Grasp)>> {
-        let parts: Vec<TriangleMesh> = table
+        let mut parts: Vec<TriangleMesh> = table
             .iter()
             .map(|o| o.shape.mesh().transformed(&o.pose))
             .collect();
+        if walls {
+            parts.extend(self.walls.iter().map(|(mesh, _)| mesh.clone()));
+        }
         let merged = TriangleMesh::concatenate(&parts, parts[0].origin())?;
         let depths = render_depths(renderer, &merged, &Pose3::IDENTITY, cameras)?;
-        let views: Vec<View> = cameras
-            .iter()
-            .zip(depths)
-            .map(|(camera, depth)| View {
+        let inside = ClutterScene::Bin.pile_params().box_half_side_m - BIN_MARGIN_M;
+        let mut views = Vec::with_capacity(cameras.len());
+        for (camera, depth) in cameras.iter().zip(depths) {
+            // In the bin, the workspace is its inside: what stands over its floor, as a bin
+            // picker is told where its bin is. Elsewhere no mask.
+            let mask = if walls {
+                match bin_mask(camera, &depth, inside) {
+                    Some(mask) => Some(mask),
+                    None => return Ok(None),
+                }
+            } else {
+                None
+            };
+            views.push(View {
                 camera: *camera,
                 depth,
-                mask: None,
-            })
-            .collect();
+                mask,
+            });
+        }
         let gripper = &self.labels.gripper;
         // A plan that finds nothing (no table, no candidate) is the round's end, as VGN's
         // "no grasp detected".
@@ -480,8 +542,13 @@ impl ClutterSuite {
             .collect())
     }
 
-    /// `drawn` dropped into a box at random orientations, over its middle 10 cm.
-    fn pile(&self, objects: &[Drawn], rng: &mut ChaCha8Rng) -> Result<Vec<OnTable>> {
+    /// `drawn` dropped into `scene`'s box at random orientations, over its middle 10 cm.
+    fn pile(
+        &self,
+        objects: &[Drawn],
+        scene: ClutterScene,
+        rng: &mut ChaCha8Rng,
+    ) -> Result<Vec<OnTable>> {
         let drops: Vec<Drop<'_>> = objects
             .iter()
             .map(|(_, _, physics)| Drop {
@@ -490,7 +557,7 @@ impl ClutterSuite {
                 xy: [rng.random_range(-0.05..0.05), rng.random_range(-0.05..0.05)],
             })
             .collect();
-        let rested = drop_pile(&drops, &PileParams::default(), &self.labels.physics)?;
+        let rested = drop_pile(&drops, &scene.pile_params(), &self.labels.physics)?;
         Ok(objects
             .iter()
             .zip(rested)
@@ -522,6 +589,29 @@ fn on_table(object: &Drawn, pose: Pose3) -> OnTable {
         physics: Rc::clone(&object.2),
         pose,
     }
+}
+
+/// How far inside the bin's walls its workspace mask ends, metres.
+const BIN_MARGIN_M: f32 = 0.01;
+
+/// The pixels of `depth` that see something standing over the bin's floor (within `inside`
+/// of its centre, 3 mm or more above it); `None` when there is none.
+fn bin_mask(camera: &Camera, depth: &DepthImage, inside: f32) -> Option<Mask> {
+    let width = depth.width();
+    let pixels = depth
+        .as_slice()
+        .iter()
+        .enumerate()
+        .map(|(i, &z)| {
+            if !(z > 0.0 && z.is_finite()) {
+                return false;
+            }
+            let (u, v) = ((i as u32 % width) as f32, (i as u32 / width) as f32);
+            let p = camera.unproject(u, v, z);
+            p.x.abs() < inside && p.y.abs() < inside && p.z > 0.003
+        })
+        .collect();
+    Mask::new(width, depth.height(), pixels).ok()
 }
 
 /// A rotation drawn uniformly (Shoemake's subgroup algorithm).

@@ -1,10 +1,11 @@
 //! Piles (`drop_pile`): objects dropped into a box rest on the table and on each other, inside
-//! the workspace, the same bits each time; and the trial's settle finds them at rest.
+//! the workspace, the same bits each time; the trial's settle finds them at rest; in a bin
+//! (the box kept) they stay inside and its walls are obstacles of the trial.
 
 use mvgrasp_geometry::{Pose3, Rot3, TriangleMesh, Vec3};
 use mvgrasp_grasp::physics::{
-    Drop, FailureStage, PhysicsObject, PhysicsParams, PileParams, ShapeParams, drop_pile,
-    settle_objects, simulate_grasp_among,
+    Drop, FailureStage, PhysicsObject, PhysicsParams, PileParams, ShapeParams, box_walls,
+    drop_pile, settle_objects, simulate_grasp_among, simulate_grasp_in_scene,
 };
 use mvgrasp_grasp::{Grasp, Gripper};
 use parry3d::shape::Cuboid;
@@ -134,4 +135,69 @@ fn a_block_left_on_nothing_comes_down_to_the_table_and_one_off_the_edge_is_taken
     let rested = poses[0].expect("in the workspace");
     assert!((rested.translation.z - 0.02).abs() < 1.0e-3, "{rested:?}");
     assert!(poses[1].is_none(), "{:?}", poses[1]);
+}
+
+#[test]
+fn in_a_bin_the_pile_stays_inside_the_walls_and_a_wall_under_a_finger_stops_the_approach() {
+    let blocks = blocks();
+    let physics = PhysicsParams::default();
+    let bin = PileParams {
+        keep_box: true,
+        ..PileParams::default()
+    };
+    // Let go near a wall: without it they would spill past it.
+    let drops: Vec<Drop<'_>> = four_drops(&blocks)
+        .into_iter()
+        .map(|d| Drop {
+            xy: [d.xy[0] + 0.07, d.xy[1]],
+            ..d
+        })
+        .collect();
+    let poses = drop_pile(&drops, &bin, &physics).unwrap();
+    for (pose, drop) in poses.iter().zip(&drops) {
+        let pose = pose.expect("nothing leaves a bin");
+        let aabb = drop.object.shape().compute_aabb(&pose);
+        let inside = bin.box_half_side_m + 1.0e-3;
+        assert!(
+            aabb.maxs.x <= inside && aabb.mins.x >= -inside && aabb.maxs.y <= inside,
+            "a block outside the walls: {aabb:?}"
+        );
+    }
+    // A cube against the +x wall's inside of a low bin (4 cm, under the palm), gripped across
+    // x: the outer finger comes down on the wall. Across y it clears it.
+    let low = PileParams {
+        box_height_m: 0.04,
+        ..bin
+    };
+    let cube = block(Vec3::splat(0.02));
+    let walls: Vec<(PhysicsObject, Pose3)> = box_walls(&low)
+        .into_iter()
+        .map(|(half, centre)| (block(half), Pose3::from_translation(centre)))
+        .collect();
+    let fixed: Vec<(&PhysicsObject, Pose3)> = walls.iter().map(|(w, p)| (w, *p)).collect();
+    let x = bin.box_half_side_m - 0.021;
+    let pose = Pose3::from_translation(Vec3::new(x, 0.0, 0.02));
+    let down = Rot3::from_rotation_x(std::f32::consts::PI);
+    let across_x = Grasp {
+        world_from_gripper: Pose3::from_parts(Vec3::new(x, 0.0, 0.02), down),
+        width_m: 0.04,
+    };
+    let across_y = Grasp {
+        world_from_gripper: Pose3::from_parts(
+            Vec3::new(x, 0.0, 0.02),
+            Rot3::from_rotation_z(std::f32::consts::FRAC_PI_2) * down,
+        ),
+        width_m: 0.04,
+    };
+    let gripper = Gripper::default();
+    let blocked =
+        simulate_grasp_in_scene(&cube, &pose, &[], &fixed, &across_x, &gripper, &physics).unwrap();
+    assert_eq!(
+        blocked.failed_at,
+        Some(FailureStage::Approach),
+        "{blocked:?}"
+    );
+    let held =
+        simulate_grasp_in_scene(&cube, &pose, &[], &fixed, &across_y, &gripper, &physics).unwrap();
+    assert!(held.success, "{held:?}");
 }

@@ -113,6 +113,9 @@ pub struct Fusion {
     /// Per cell count: free, unknown, occupied.
     counts: [usize; 3],
     allow_unknown: bool,
+    /// The bounds of the object's observed points above the table (within the views' masks,
+    /// where they have them), world.
+    object_bounds: Bounds,
 }
 
 impl Fusion {
@@ -179,6 +182,7 @@ impl Fusion {
             buckets: Vec::new(),
             counts: [0; 3],
             allow_unknown: params.allow_unknown,
+            object_bounds: (lo, hi),
         };
         // Space carving, a z-slice of cells per task; each view's pose inverted once.
         let carvers: Vec<(Pose3, &View)> = views
@@ -247,6 +251,13 @@ impl Fusion {
     /// Cells along x, y and z.
     pub fn dims(&self) -> [usize; 3] {
         self.dims
+    }
+
+    /// The box around the object's observed points above the table (within the views'
+    /// masks, where they have them), world: lower and upper corners. Other observed points
+    /// (a neighbour off the mask, a bin's wall) are obstacles, not the object.
+    pub fn object_bounds(&self) -> (Vec3, Vec3) {
+        self.object_bounds
     }
 
     /// Height of the table, metres.

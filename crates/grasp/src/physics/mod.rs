@@ -87,8 +87,10 @@ mod trial;
 
 pub use object::{PhysicsObject, shape_error};
 pub use params::{PhysicsNoise, PhysicsParams};
-pub use pile::{Drop, PileParams, drop_pile, settle_objects};
+pub use pile::{Drop, PileParams, box_walls, drop_pile, settle_objects};
 pub use robust::{StageCounts, SuccessEstimate, success_probability};
 pub use scene::{PAD_BALL_RADIUS_M, PAD_BALLS, pad_ring_radius};
 pub use shell::{ShapeError, ShapeParams};
-pub use trial::{FailureStage, PhysicsOutcome, simulate_grasp, simulate_grasp_among};
+pub use trial::{
+    FailureStage, PhysicsOutcome, simulate_grasp, simulate_grasp_among, simulate_grasp_in_scene,
+};

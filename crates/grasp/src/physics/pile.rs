@@ -20,6 +20,7 @@ use crate::physics::scene::{insert_object, table_world};
 /// | `object_wait_s` | 1 s | at most this long for the pile to rest after each drop |
 /// | `final_wait_s` | 2 s | and after the box is taken away |
 /// | `workspace_half_side_m` | 0.15 m | an object whose centre of mass leaves the 30 cm square is taken away |
+/// | `keep_box` | false | the box stays: a bin |
 ///
 /// VGN drops each object from 20 cm; here it starts just above the pile, so that nothing
 /// moves faster than the trial's contacts see coming (the trial's world has no continuous
@@ -40,6 +41,9 @@ pub struct PileParams {
     pub final_wait_s: f32,
     /// Half the side of the square an object's centre of mass must stay in, metres.
     pub workspace_half_side_m: f32,
+    /// The box stays on the table (a bin): [`drop_pile`] does not take it away and
+    /// [`settle_objects`] settles the objects in it.
+    pub keep_box: bool,
 }
 
 impl Default for PileParams {
@@ -52,6 +56,7 @@ impl Default for PileParams {
             object_wait_s: 1.0,
             final_wait_s: 2.0,
             workspace_half_side_m: 0.15,
+            keep_box: false,
         }
     }
 }
@@ -106,7 +111,7 @@ pub struct Drop<'a> {
 }
 
 /// Drops `drops` one by one into a box on the table, each just above everything dropped
-/// before, waits after each for the pile to rest, takes the box away and waits again; then
+/// before (moved in from a wall it would cross), waits after each for the pile to rest, takes the box away and waits again; then
 /// takes away (repeatedly, waiting each time) any object whose centre of mass has left the
 /// workspace square. Each object's resting pose (table frame, the pose to give
 /// [`crate::physics::simulate_grasp_among`]), or `None` where it was taken away.
@@ -137,20 +142,34 @@ pub fn drop_pile(
     let mut bodies: Vec<Option<RigidBodyHandle>> = Vec::with_capacity(drops.len());
     for drop in drops {
         let turned = Pose3::from_rotation(drop.rotation);
-        let (low, _) = z_extent(drop.object, &turned);
+        let extent = drop.object.shape().compute_aabb(&turned);
         let com = turned.transform_point(drop.object.center_of_mass());
         let top = highest_point(&world, &bodies, drops);
-        // Centre of mass over (x, y), the lowest point `drop_gap_m` above the pile.
+        // Centre of mass over (x, y), moved in as far as it takes to clear the walls (an
+        // object let go across a wall would be thrown out of it); the lowest point
+        // `drop_gap_m` above the pile.
+        let inside = pile.box_half_side_m - 1.0e-3;
+        let clamp = |want: f32, lo: f32, hi: f32, c: f32| {
+            // Translation t puts the extent at [lo + t, hi + t]; keep it in [-inside, inside].
+            let (min_t, max_t) = (-inside - lo, inside - hi);
+            if min_t > max_t {
+                (min_t + max_t) / 2.0
+            } else {
+                (want - c).clamp(min_t, max_t)
+            }
+        };
         let offset = Vec3::new(
-            drop.xy[0] - com.x,
-            drop.xy[1] - com.y,
-            top + pile.drop_gap_m - low,
+            clamp(drop.xy[0], extent.mins.x, extent.maxs.x, com.x),
+            clamp(drop.xy[1], extent.mins.y, extent.maxs.y, com.y),
+            top + pile.drop_gap_m - extent.mins.z,
         );
         let pose = Pose3::from_parts(offset, drop.rotation);
         bodies.push(Some(insert_object(&mut world, drop.object, &pose, physics)));
         wait_for_rest(&mut world, &bodies, pile, pile.object_wait_s);
     }
-    world.remove_body(walls);
+    if !pile.keep_box {
+        world.remove_body(walls);
+    }
     Ok(rest_and_clear(&mut world, bodies, pile))
 }
 
@@ -176,6 +195,9 @@ pub fn settle_objects(
         });
     }
     let (mut world, _table) = table_world(physics);
+    if pile.keep_box {
+        insert_box(&mut world, pile);
+    }
     let bodies = objects
         .iter()
         .map(|(object, pose)| Some(insert_object(&mut world, object, pose, physics)))
@@ -217,22 +239,30 @@ fn rest_and_clear(
         .collect()
 }
 
-/// The box: a fixed body of four walls standing on the table around the origin.
-fn insert_box(world: &mut PhysicsWorld, pile: &PileParams) -> RigidBodyHandle {
-    const WALL_HALF_THICKNESS_M: f32 = 0.005;
-    let body = world.insert_body(RigidBodyBuilder::fixed());
+/// Half the thickness of the box's walls, metres.
+const WALL_HALF_THICKNESS_M: f32 = 0.005;
+
+/// The box's four walls standing on the table around the origin: each wall's half extents
+/// and its centre (table frame, metres).
+pub fn box_walls(pile: &PileParams) -> [(Vec3, Vec3); 4] {
     let (h, t, z) = (
         pile.box_half_side_m,
         WALL_HALF_THICKNESS_M,
         pile.box_height_m / 2.0,
     );
     let long = h + 2.0 * t;
-    for (centre, half) in [
-        (Vec3::new(h + t, 0.0, z), Vec3::new(t, long, z)),
-        (Vec3::new(-h - t, 0.0, z), Vec3::new(t, long, z)),
-        (Vec3::new(0.0, h + t, z), Vec3::new(long, t, z)),
-        (Vec3::new(0.0, -h - t, z), Vec3::new(long, t, z)),
-    ] {
+    [
+        (Vec3::new(t, long, z), Vec3::new(h + t, 0.0, z)),
+        (Vec3::new(t, long, z), Vec3::new(-h - t, 0.0, z)),
+        (Vec3::new(long, t, z), Vec3::new(0.0, h + t, z)),
+        (Vec3::new(long, t, z), Vec3::new(0.0, -h - t, z)),
+    ]
+}
+
+/// The box: a fixed body of its four walls.
+fn insert_box(world: &mut PhysicsWorld, pile: &PileParams) -> RigidBodyHandle {
+    let body = world.insert_body(RigidBodyBuilder::fixed());
+    for (half, centre) in box_walls(pile) {
         world.insert_collider(
             ColliderBuilder::cuboid(half.x, half.y, half.z).translation(centre),
             Some(body),

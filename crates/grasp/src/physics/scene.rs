@@ -9,7 +9,8 @@ use parry3d::shape::{Cuboid, Shape, TriMesh};
 use rapier3d::prelude::{
     CoefficientCombineRule, ColliderBuilder, ColliderHandle, FrictionModel, GenericJointBuilder,
     Group, ImpulseJointHandle, InteractionGroups, InteractionTestMode, JointAxesMask, JointAxis,
-    PhysicsWorld, PrismaticJointBuilder, RigidBodyBuilder, RigidBodyHandle, SpringCoefficients,
+    PhysicsWorld, PrismaticJointBuilder, RigidBodyBuilder, RigidBodyHandle, RigidBodyType,
+    SpringCoefficients,
 };
 use std::sync::Arc;
 
@@ -214,6 +215,21 @@ impl Scene {
         params: &PhysicsParams,
     ) {
         let body = insert_object(&mut self.world, object, table_from_object, params);
+        self.neighbours.push((body, object.surface().clone()));
+    }
+
+    /// Adds a fixed obstacle at `table_from_object` (a bin's wall): objects and the hand
+    /// collide with it and the approach must clear it, but nothing moves it.
+    pub fn add_fixed(
+        &mut self,
+        object: &PhysicsObject,
+        table_from_object: &Pose3,
+        params: &PhysicsParams,
+    ) {
+        let body = insert_object(&mut self.world, object, table_from_object, params);
+        if let Some(b) = self.world.bodies.get_mut(body) {
+            b.set_body_type(RigidBodyType::Fixed, true);
+        }
         self.neighbours.push((body, object.surface().clone()));
     }
 

@@ -116,7 +116,37 @@ pub fn simulate_grasp_among(
     gripper: &Gripper,
     params: &PhysicsParams,
 ) -> Result<PhysicsOutcome> {
-    if let Some((_, pose)) = neighbours.iter().find(|(_, pose)| !pose.is_finite()) {
+    simulate_grasp_in_scene(
+        object,
+        table_from_object,
+        neighbours,
+        &[],
+        grasp,
+        gripper,
+        params,
+    )
+}
+
+/// [`simulate_grasp_among`] with fixed obstacles beside the neighbours (`fixed`, each at its
+/// pose: a bin's walls): objects and the hand collide with them and the approach must clear
+/// them, but nothing moves them.
+///
+/// # Errors
+/// See [`simulate_grasp_among`]; a non-finite obstacle pose.
+pub fn simulate_grasp_in_scene(
+    object: &PhysicsObject,
+    table_from_object: &Pose3,
+    neighbours: &[(&PhysicsObject, Pose3)],
+    fixed: &[(&PhysicsObject, Pose3)],
+    grasp: &Grasp,
+    gripper: &Gripper,
+    params: &PhysicsParams,
+) -> Result<PhysicsOutcome> {
+    if let Some((_, pose)) = neighbours
+        .iter()
+        .chain(fixed)
+        .find(|(_, pose)| !pose.is_finite())
+    {
         return Err(GraspError::InvalidParameter {
             op: "physics trial",
             name: "neighbour pose",
@@ -142,6 +172,9 @@ pub fn simulate_grasp_among(
     let mut scene = Scene::new(object, table_from_object, params);
     for (neighbour, pose) in neighbours {
         scene.add_neighbour(neighbour, pose, params);
+    }
+    for (obstacle, pose) in fixed {
+        scene.add_fixed(obstacle, pose, params);
     }
     let mut trial = Trial {
         scene,
