@@ -4,6 +4,9 @@
 //! 5 views (gqcnn's real Primesense images 0 to 4, each with its own estimated pose, planned
 //! together); the median of repeated runs, and grasps scored per second.
 //!
+//! Then one view of gqcnn's real clutter images (10 PhoXi bins, 5 Primesense piles, 640 x 480
+//! or larger), planned without a mask as `plan --depth` plans it, per set.
+//!
 //! Then the multi-view planner on a rendered scene (the built-in default object, 5 views on
 //! the hemisphere 0.65 m away, the first top-down; rendering not timed): fusing the views,
 //! planning in every view with the multi-view GQ-CNN, the hand check against the fused model,
@@ -25,8 +28,9 @@ use clap::Parser;
 use mvgrasp::cli::CliResult;
 use mvgrasp::grasp::GraspObject;
 use mvgrasp::planner::{
-    CemParams, Fusion, FusionParams, GqcnnPolicy, MultiViewPlanner, PlanParams, SensorFiles, View,
-    VirtualScorer, models, read_view, render_scene, sample_image_grasps,
+    CemParams, Fusion, FusionParams, GqcnnPolicy, MultiViewPlanner, PlanParams, SensorFiles,
+    SensorPlanParams, View, VirtualScorer, models, plan_on_sensor_depth, read_view, render_scene,
+    sample_image_grasps,
 };
 use mvgrasp::render::{Backend, Renderer};
 use mvgrasp_planner::{TableFitParams, fit_table, objects_above};
@@ -183,7 +187,86 @@ fn run(args: &Args) -> CliResult<()> {
         "targets: 1 view under 50 ms, 5 views under 150 ms; published, not run here: Dex-Net 2.0 \
          0.8 s a view on a GPU, 2.5 s with the cross-entropy method"
     );
+    bench_clutter(args, &root, &gripper)?;
     bench_fused(args)
+}
+
+/// gqcnn's real clutter images (10 PhoXi bins, 5 Primesense piles): one view planned as `plan
+/// --depth D --intrinsics K --camera-pose P` plans it, no mask (read, table and objects, plan,
+/// hand check); per set, the median over its images of each image's median run.
+fn bench_clutter(
+    args: &Args,
+    root: &std::path::Path,
+    gripper: &mvgrasp::grasp::Gripper,
+) -> CliResult<()> {
+    let sets = [
+        (
+            "PhoXi bins (Dex-Net 4.0)",
+            "examples/clutter/phoxi/dex-net_4.0",
+            "phoxi/phoxi.intr",
+            "phoxi/phoxi_to_world.tf",
+        ),
+        (
+            "PhoXi bins (FC-GQ-CNN)",
+            "examples/clutter/phoxi/fcgqcnn",
+            "phoxi/phoxi.intr",
+            "phoxi/phoxi_to_world.tf",
+        ),
+        (
+            "Primesense piles",
+            "examples/clutter/primesense",
+            "primesense/primesense.intr",
+            "primesense/primesense.tf",
+        ),
+    ];
+    let planner = mvgrasp::planner::Planner::from(GqcnnPolicy::new(
+        models::GQCNN_TOPDOWN.load()?,
+        gripper.max_opening_m,
+    )?);
+    let params = SensorPlanParams::default();
+    println!(
+        "\nclutter: one real view planned without a mask (`plan --depth` with the camera's pose), \
+         median of {} runs per image, ms; target 200 ms",
+        args.runs
+    );
+    println!(
+        "{:<28} {:>10} {:>8} {:>8}",
+        "images", "size", "median", "slowest"
+    );
+    for (name, folder, intrinsics, pose) in sets {
+        let mut per_image = Vec::new();
+        let mut size = String::new();
+        for i in 0..5 {
+            let files = SensorFiles {
+                depth: root.join(folder).join(format!("depth_{i}.npy")),
+                intrinsics: root.join("calib").join(intrinsics),
+                camera_pose: Some(root.join("calib").join(pose)),
+                mask: None,
+            };
+            let once = || -> CliResult<(f64, String)> {
+                let t = Instant::now();
+                let report = plan_on_sensor_depth(&planner, gripper, &files, &params)?;
+                let k = report.view.camera.intrinsics;
+                Ok((
+                    t.elapsed().as_secs_f64(),
+                    format!("{} x {}", k.width, k.height),
+                ))
+            };
+            size = once()?.1; // warm-up
+            let runs = (0..args.runs)
+                .map(|_| once().map(|(t, _)| t))
+                .collect::<CliResult<Vec<f64>>>()?;
+            per_image.push(median(runs));
+        }
+        let slowest = per_image.iter().copied().fold(0.0, f64::max);
+        println!(
+            "{name:<28} {size:>10} {:>8.1} {:>8.1}",
+            1000.0 * median(per_image),
+            1000.0 * slowest
+        );
+    }
+    println!("(no peer runs here: gqcnn's Dex-Net 4.0 and FC-GQ-CNN need TensorFlow 1)");
+    Ok(())
 }
 
 /// The multi-view planner's stages on 5 rendered views of the default object.
