@@ -15,7 +15,7 @@ impl Progress for Quiet {
 
 /// Two small built-in objects as mesh files in `dir/meshes`, and a config that plans on them
 /// with the depth planner, two seeds and the exhaustive search, predicts their depth from
-/// 1 and 2 views, and clears a packed, a pile and a bin scene of two of them from one view.
+/// 1 and 2 views, and clears a packed, a pile and a bin scene of two of them from one Primesense view 0.6 m away.
 fn two_objects(dir: &Path) -> EvalConfig {
     let meshes = dir.join("meshes");
     std::fs::create_dir_all(&meshes).unwrap();
@@ -39,6 +39,8 @@ fn two_objects(dir: &Path) -> EvalConfig {
         clutter_views: vec![1],
         clutter_rounds: 1,
         clutter_objects: 2,
+        clutter_camera: "primesense".into(),
+        clutter_distance_m: 0.6,
     }
 }
 
@@ -150,6 +152,11 @@ fn a_folder_of_another_runs_settings_and_an_unknown_policy_are_refused_by_name()
             "clutter scene \"tote\": expected one of packed, pile, bin",
         ),
         ("--clutter-views", "0", "clutter views 0: expected 1 to 9"),
+        (
+            "--clutter-distance-m",
+            "3",
+            "clutter distance 3 m: expected 0.3 to 1.5",
+        ),
         (
             "--clutter-objects",
             "0",

@@ -91,6 +91,12 @@ struct Args {
     /// Objects per clutter round (default 5, as VGN and GIGA).
     #[arg(long)]
     clutter_objects: Option<usize>,
+    /// The clutter suite's cameras: phoxi_s (default), primesense or realsense_d435.
+    #[arg(long)]
+    clutter_camera: Option<String>,
+    /// Their distance from the table's centre, metres (default 0.7).
+    #[arg(long)]
+    clutter_distance_m: Option<f32>,
     /// Plain progress lines even on a terminal.
     #[arg(long)]
     plain: bool,
@@ -159,6 +165,12 @@ fn config_of(args: &Args) -> EvalConfig {
     }
     if let Some(n) = args.clutter_objects {
         config.clutter_objects = n;
+    }
+    if let Some(c) = &args.clutter_camera {
+        config.clutter_camera.clone_from(c);
+    }
+    if let Some(d) = args.clutter_distance_m {
+        config.clutter_distance_m = d;
     }
     config.all_poses |= args.all_poses;
     config.coverage |= args.coverage;

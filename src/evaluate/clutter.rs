@@ -147,12 +147,29 @@ pub struct RoundRecord {
     pub views: usize,
     /// The round's index (its scene's seed).
     pub round: usize,
+    /// The cameras' intrinsics preset.
+    #[serde(default = "phoxi")]
+    pub camera: String,
+    /// Their distance from the table's centre, metres.
+    #[serde(default = "seventy_cm")]
+    pub distance_m: f32,
     /// Objects on the table once the scene was set (a pile's that fell out not counted).
     pub objects: usize,
     /// Objects that left the workspace as the others settled after a grasp (not cleared).
     pub fell_out: usize,
     /// The attempts, in order.
     pub attempts: Vec<Attempt>,
+}
+
+/// The rounds' cameras by default: a PhoXi S 0.7 m from the table's centre.
+pub const DEFAULT_CAMERA: (IntrinsicsPreset, f32) = (IntrinsicsPreset::PhoxiS, 0.7);
+
+fn phoxi() -> String {
+    DEFAULT_CAMERA.0.name().to_string()
+}
+
+fn seventy_cm() -> f32 {
+    DEFAULT_CAMERA.1
 }
 
 impl RoundRecord {
@@ -187,13 +204,12 @@ impl RoundRecord {
 const MAX_RESETTLES: usize = 2;
 
 /// The rounds' cameras: the top-down one first, then `views - 1` around at 50 degrees, all
-/// 0.7 m from the table's centre.
+/// `distance` metres from the table's centre, each a `preset` camera.
 ///
 /// # Errors
-/// None in practice (the cameras are valid by construction); a camera that cannot look.
-pub fn cameras(views: usize) -> Result<Vec<Camera>> {
-    let k = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
-    let distance = 0.7;
+/// A distance at which a camera cannot look (not positive and finite).
+pub fn cameras(views: usize, preset: IntrinsicsPreset, distance: f32) -> Result<Vec<Camera>> {
+    let k = Intrinsics::preset(preset);
     let mut cameras = vec![Camera::look_at(
         k,
         Vec3::new(0.0, 0.0, distance),
@@ -340,17 +356,16 @@ impl ClutterSuite {
         Ok(drawn)
     }
 
-    /// Runs round `round` of `scene` with `count` objects, planned on `views` depth views.
+    /// Runs round `round` of `scene` with `count` objects, planned on `views` depth views of
+    /// `camera` cameras `distance_m` from the table's centre.
     ///
     /// # Errors
     /// An object that cannot be built, a render or a trial that fails.
     pub fn round(
         &self,
         renderer: &Renderer,
-        scene: ClutterScene,
-        views: usize,
-        count: usize,
-        round: usize,
+        (scene, views, count, round): (ClutterScene, usize, usize, usize),
+        (camera, distance_m): (IntrinsicsPreset, f32),
     ) -> Result<RoundRecord> {
         let salt = match scene {
             ClutterScene::Packed => 0,
@@ -363,7 +378,7 @@ impl ClutterSuite {
             ClutterScene::Packed => self.pack(&drawn, &mut rng)?,
             ClutterScene::Pile | ClutterScene::Bin => self.pile(&drawn, scene, &mut rng)?,
         };
-        let cameras = cameras(views)?;
+        let cameras = cameras(views, camera, distance_m)?;
         let pile = scene.pile_params();
         // The walls stand in the trial where the meshes were (their shapes are centred).
         let fixed: Vec<(&PhysicsObject, Pose3)> = if scene == ClutterScene::Bin {
@@ -381,6 +396,8 @@ impl ClutterSuite {
             scene,
             views,
             round,
+            camera: camera.name().to_string(),
+            distance_m,
             objects: table.len(),
             fell_out: 0,
             attempts: Vec::new(),

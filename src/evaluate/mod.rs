@@ -69,6 +69,20 @@ pub struct EvalConfig {
     /// Objects per round (VGN and GIGA: 5).
     #[serde(default = "five")]
     pub clutter_objects: usize,
+    /// Its cameras' intrinsics preset (`phoxi_s`, `primesense`, `realsense_d435`).
+    #[serde(default = "clutter_camera")]
+    pub clutter_camera: String,
+    /// Its cameras' distance from the table's centre, metres.
+    #[serde(default = "clutter_distance_m")]
+    pub clutter_distance_m: f32,
+}
+
+fn clutter_camera() -> String {
+    clutter::DEFAULT_CAMERA.0.name().into()
+}
+
+fn clutter_distance_m() -> f32 {
+    clutter::DEFAULT_CAMERA.1
 }
 
 fn both_scenes() -> Vec<String> {
@@ -124,6 +138,8 @@ impl EvalConfig {
             clutter_views: one_view(),
             clutter_rounds: small_rounds(),
             clutter_objects: five(),
+            clutter_camera: clutter_camera(),
+            clutter_distance_m: clutter_distance_m(),
         }
     }
 }
@@ -205,6 +221,16 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
     if let Some(n) = config.depth_views.iter().find(|n| !(1..=10).contains(*n)) {
         return Err(invalid(format!(
             "depth views {n}: expected 1 to 10 (there are 10 test views)"
+        )));
+    }
+    let camera: mvgrasp_geometry::IntrinsicsPreset = config
+        .clutter_camera
+        .parse()
+        .map_err(|e| invalid(format!("clutter camera: {e}")))?;
+    if !(0.3..=1.5).contains(&config.clutter_distance_m) {
+        return Err(invalid(format!(
+            "clutter distance {} m: expected 0.3 to 1.5",
+            config.clutter_distance_m
         )));
     }
     // Written only once the settings are known good: a refused run leaves no config behind.
@@ -324,7 +350,13 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
     let mut suite: Option<clutter::ClutterSuite> = None;
     let before = total - rounds.len();
     for (done, &(scene, views, round)) in rounds.iter().enumerate() {
-        let key = format!("clutter|{}|{views}|{round}", scene.name());
+        // The default cameras' keys carry no camera (the first rounds were recorded so).
+        let cameras = if (camera, config.clutter_distance_m) == clutter::DEFAULT_CAMERA {
+            String::new()
+        } else {
+            format!("{}@{}|", camera.name(), config.clutter_distance_m)
+        };
+        let key = format!("clutter|{}|{views}|{cameras}{round}", scene.name());
         let mut work = || -> Result<clutter::RoundRecord> {
             if let Some(record) = journal.get(&key)? {
                 return Ok(record);
@@ -333,7 +365,11 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
                 Some(ref suite) => suite,
                 None => suite.insert(clutter::ClutterSuite::new(&objects, &config.clutter_views)?),
             };
-            let record = suite.round(&renderer, scene, views, config.clutter_objects, round)?;
+            let record = suite.round(
+                &renderer,
+                (scene, views, config.clutter_objects, round),
+                (camera, config.clutter_distance_m),
+            )?;
             journal.put(&key, &record)
         };
         match work() {

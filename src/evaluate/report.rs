@@ -537,15 +537,28 @@ fn clutter_table(md: &mut String, rounds: &[super::clutter::RoundRecord]) {
     );
     let _ = writeln!(
         md,
-        "| scene | views | rounds | objects | grasps | success | cleared | ended with no grasp | failures by phase | fell out | uncounted |\n|---|---|---|---|---|---|---|---|---|---|---|"
+        "| scene | views | cameras | rounds | objects | grasps | success | cleared | ended with no grasp | failures by phase | fell out | uncounted |\n|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
-    let mut keys: Vec<(ClutterScene, usize)> = rounds.iter().map(|r| (r.scene, r.views)).collect();
+    let mut keys: Vec<(ClutterScene, usize, String)> = rounds
+        .iter()
+        .map(|r| {
+            (
+                r.scene,
+                r.views,
+                format!("{} {:.2} m", r.camera, r.distance_m),
+            )
+        })
+        .collect();
     keys.sort();
     keys.dedup();
-    for (scene, views) in keys {
+    for (scene, views, cameras) in keys {
         let of: Vec<_> = rounds
             .iter()
-            .filter(|r| r.scene == scene && r.views == views)
+            .filter(|r| {
+                r.scene == scene
+                    && r.views == views
+                    && format!("{} {:.2} m", r.camera, r.distance_m) == cameras
+            })
             .collect();
         let sum = |f: &dyn Fn(&super::clutter::RoundRecord) -> usize| -> usize {
             of.iter().map(|r| f(r)).sum()
@@ -590,7 +603,7 @@ fn clutter_table(md: &mut String, rounds: &[super::clutter::RoundRecord]) {
         };
         let _ = writeln!(
             md,
-            "| {} | {views} | {} | {objects} | {tried} | {} | {} | {no_grasp} | {phases} | {} | {unsettled} |",
+            "| {} | {views} | {cameras} | {} | {objects} | {tried} | {} | {} | {no_grasp} | {phases} | {} | {unsettled} |",
             scene.name(),
             of.len(),
             rate(held, tried),
