@@ -374,7 +374,7 @@ fn kill_and_resume_and_any_thread_count_give_the_same_bytes() {
 
 /// Clutter changes what the crops show and which grasps are free, nothing else: the same
 /// grasps, qualities and cameras as the object alone, every grasp that clutter leaves free is
-/// free alone, and some crop shows a neighbour.
+/// free alone, and some crop shows a neighbour; physics labels are run among the neighbours.
 #[test]
 fn clutter_adds_neighbours_to_the_crops_and_to_the_hand_check_only() {
     let Some(renderer) = renderer() else { return };
@@ -438,11 +438,25 @@ fn clutter_adds_neighbours_to_the_crops_and_to_the_hand_check_only() {
     assert!(differing_crops > 0, "no crop shows a neighbour");
     assert!(lost_freedom > 0, "no neighbour is in any hand's way");
 
+    // Physics labels among the neighbours (the trial in the cluttered scene, where the
+    // object must come out alone: `success_probability_among`, tested in the grasp crate):
+    // every collision-free datapoint gets one, and the same seed gives the same bytes.
     let physics = GraspDatasetConfig {
-        physics_fraction: 0.5,
+        physics_fraction: 1.0,
+        physics_trials: 2,
         ..cluttered
     };
-    let dir = tempfile::tempdir().unwrap();
-    let err = generate(&renderer, &objects, &physics, dir.path(), false).unwrap_err();
-    assert!(err.to_string().contains("physics_fraction"), "{err}");
+    let labelled = read(&physics);
+    assert_eq!(labelled, read(&physics), "the same seed, the same bytes");
+    for bytes in &labelled {
+        let shard = SafeTensors::deserialize(bytes).unwrap();
+        let free = shard.tensor("collision_free").unwrap().data().to_vec();
+        for (rate, free) in f32s(&shard, "physics_rate").iter().zip(free) {
+            assert_eq!(
+                *rate >= 0.0,
+                free == 1,
+                "a physics label on each free datapoint"
+            );
+        }
+    }
 }

@@ -13,6 +13,7 @@
 use std::borrow::Borrow;
 
 use mvgrasp_geometry::{Pose3, RestingPoses, Rot3, TriangleMesh, Vec3};
+use mvgrasp_grasp::physics::{PhysicsObject, ShapeParams};
 use mvgrasp_grasp::{GraspObject, Gripper, HandShapes};
 use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
@@ -84,11 +85,13 @@ impl ClutterParams {
 }
 
 /// A neighbour as loaded once for an object: its mesh, the shape the hand check meets, and
-/// its steady resting poses with their probabilities.
+/// its steady resting poses with their probabilities (and, built when the physics labels ask,
+/// its shapes for the trial).
 pub struct Neighbour {
     mesh: TriangleMesh,
     object: GraspObject,
     poses: Vec<(f32, Pose3)>,
+    physics: std::sync::OnceLock<std::result::Result<PhysicsObject, String>>,
 }
 
 impl Neighbour {
@@ -100,6 +103,21 @@ impl Neighbour {
     /// The shape the hand check meets.
     pub fn object(&self) -> &GraspObject {
         &self.object
+    }
+
+    /// Its shapes for the trial, built with `shape` on first use (one dataset, one `shape`).
+    ///
+    /// # Errors
+    /// A mesh the trial's shapes cannot be built from.
+    pub fn physics(&self, shape: &ShapeParams) -> Result<&PhysicsObject> {
+        self.physics
+            .get_or_init(|| {
+                PhysicsObject::from_grasp_object(&self.object, shape).map_err(|e| e.to_string())
+            })
+            .as_ref()
+            .map_err(|problem| Error::Evaluate {
+                problem: format!("a neighbour's trial shapes: {problem}"),
+            })
     }
 
     /// Its most probable steady resting pose.
@@ -124,6 +142,7 @@ impl Neighbour {
             object: GraspObject::new(mesh.clone())?,
             mesh,
             poses,
+            physics: std::sync::OnceLock::new(),
         })
     }
 }

@@ -226,13 +226,6 @@ impl GraspDatasetConfig {
         }
         if let Some(clutter) = &self.clutter {
             clutter.validate()?;
-            if self.physics_fraction > 0.0 {
-                return bad(
-                    "physics_fraction",
-                    self.physics_fraction,
-                    "must be 0 with clutter: the physics trial does not simulate the neighbours",
-                );
-            }
         }
         let c = self.crop;
         if c.size_px == 0 || !c.size_px.is_multiple_of(2) || c.window_px < c.size_px {

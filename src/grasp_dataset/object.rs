@@ -2,7 +2,7 @@
 //! that render its depth, and the grasps that approach along each view.
 
 use mvgrasp_geometry::{Pose3, RestingPoses, TriangleMesh, Vec3};
-use mvgrasp_grasp::physics::{PhysicsNoise, PhysicsObject, success_probability};
+use mvgrasp_grasp::physics::{PhysicsNoise, PhysicsObject, success_probability_among};
 use mvgrasp_grasp::quality::{grasp_seed, robust_qualities};
 use mvgrasp_grasp::{
     AntipodalAxis, Grasp, GraspLabel, GraspObject, Gripper, canonical_frame, check_collision,
@@ -201,9 +201,17 @@ pub(crate) fn object_datapoints(
             }
         }
         if let Some(physics_object) = &physics_object {
+            // The trial among the neighbours placed for this pose, where they rest.
+            let around: Vec<(&PhysicsObject, Pose3)> = placed
+                .iter()
+                .map(|p| {
+                    let shapes = neighbours[p.index].physics(&config.physics_shape)?;
+                    Ok((shapes, p.table_from_neighbour))
+                })
+                .collect::<Result<_>>()?;
             run_physics(
                 &mut candidates,
-                physics_object,
+                (physics_object, &around),
                 &table_from_object,
                 object_seed,
                 config,
@@ -245,7 +253,7 @@ fn aligned_frame(
 /// each trial deterministic).
 fn run_physics(
     points: &mut [Datapoint],
-    physics_object: &PhysicsObject,
+    (physics_object, neighbours): (&PhysicsObject, &[(&PhysicsObject, Pose3)]),
     table_from_object: &Pose3,
     object_seed: u64,
     config: &GraspDatasetConfig,
@@ -286,13 +294,13 @@ fn run_physics(
                 world_from_gripper: *table_from_object * object_from_gripper,
                 width_m: p.width_m,
             };
-            success_probability(
+            success_probability_among(
                 physics_object,
                 table_from_object,
+                neighbours,
                 &grasp,
                 &resolved.gripper,
-                &config.physics,
-                &noise,
+                (&config.physics, &noise),
                 config.physics_trials,
                 seed(PHYSICS_NOISE, p),
             )

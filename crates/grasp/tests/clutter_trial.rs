@@ -65,15 +65,20 @@ fn a_neighbour_under_a_finger_stops_the_approach_and_one_beside_it_does_not() {
     assert!(outcome.success, "{outcome:?}");
 }
 
-#[test]
-fn a_neighbour_lifted_with_the_object_is_not_a_grasp_of_the_object_alone() {
-    // A plank 4 x 12 x 2 cm, gripped across its middle; a 2 cm cube resting on its far end,
-    // clear of the hand, rides up with it: the plank is held, but not alone.
+/// A plank 4 x 12 x 2 cm lying on the table, and a grasp straight down across its middle.
+fn plank_gripped_across() -> (PhysicsObject, Pose3, Grasp) {
     let (v, t) = Cuboid::new(Vec3::new(0.02, 0.06, 0.01)).to_trimesh();
     let plank =
         PhysicsObject::new(&TriangleMesh::new(v, t).unwrap(), &ShapeParams::default()).unwrap();
     let pose = Pose3::from_translation(Vec3::new(0.0, 0.0, 0.01));
-    let grasp = top_down(0.0, 0.012, 0.04);
+    (plank, pose, top_down(0.0, 0.012, 0.04))
+}
+
+#[test]
+fn a_neighbour_lifted_with_the_object_is_not_a_grasp_of_the_object_alone() {
+    // A plank 4 x 12 x 2 cm, gripped across its middle; a 2 cm cube resting on its far end,
+    // clear of the hand, rides up with it: the plank is held, but not alone.
+    let (plank, pose, grasp) = plank_gripped_across();
     let params = PhysicsParams::default();
     let gripper = Gripper::default();
     let alone = simulate_grasp(&plank, &pose, &grasp, &gripper, &params).unwrap();
@@ -86,4 +91,51 @@ fn a_neighbour_lifted_with_the_object_is_not_a_grasp_of_the_object_alone() {
         outcome.object_lift_m > 0.1,
         "the plank itself was lifted: {outcome:?}"
     );
+}
+
+#[test]
+fn the_success_probability_among_neighbours_counts_a_neighbour_that_comes_along() {
+    // The plank and the cube resting on its far end (as above): held alone in most perturbed
+    // trials, far fewer with the cube on it.
+    let (plank, pose, grasp) = plank_gripped_across();
+    let params = PhysicsParams::default();
+    // Small perturbations: the grasp is 8 mm above the table.
+    let noise = mvgrasp_grasp::physics::PhysicsNoise {
+        gripper_translation_sigma_m: 0.001,
+        gripper_rotation_sigma_rad: 0.01,
+        object_translation_sigma_m: 0.001,
+        object_yaw_sigma_rad: 0.01,
+        ..Default::default()
+    };
+    let gripper = Gripper::default();
+    let small = cube(0.01);
+    let on_it = [(&small, Pose3::from_translation(Vec3::new(0.0, 0.045, 0.03)))];
+    let estimate = |neighbours: &[(&PhysicsObject, Pose3)]| {
+        mvgrasp_grasp::physics::success_probability_among(
+            &plank,
+            &pose,
+            neighbours,
+            &grasp,
+            &gripper,
+            (&params, &noise),
+            4,
+            7,
+        )
+        .unwrap()
+        .probability
+    };
+    let alone = mvgrasp_grasp::physics::success_probability(
+        &plank, &pose, &grasp, &gripper, &params, &noise, 4, 7,
+    )
+    .unwrap()
+    .probability;
+    assert_eq!(
+        estimate(&[]),
+        alone,
+        "without neighbours, success_probability"
+    );
+    assert!(alone > 0.7, "{alone}");
+    // The cube is not perturbed with the plank: it comes along in some trials, not all.
+    let among = estimate(&on_it);
+    assert!(among <= alone - 0.25, "{among} among, {alone} alone");
 }

@@ -88,7 +88,7 @@ mod trial;
 pub use object::{PhysicsObject, shape_error};
 pub use params::{PhysicsNoise, PhysicsParams};
 pub use pile::{Drop, PileParams, box_walls, drop_pile, settle_objects};
-pub use robust::{StageCounts, SuccessEstimate, success_probability};
+pub use robust::{StageCounts, SuccessEstimate, success_probability, success_probability_among};
 pub use scene::{PAD_BALL_RADIUS_M, PAD_BALLS, pad_ring_radius};
 pub use shell::{ShapeError, ShapeParams};
 pub use trial::{

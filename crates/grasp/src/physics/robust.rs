@@ -13,7 +13,7 @@ use crate::grasp::Grasp;
 use crate::gripper::Gripper;
 use crate::physics::object::PhysicsObject;
 use crate::physics::params::{PhysicsNoise, PhysicsParams};
-use crate::physics::trial::{FailureStage, simulate_grasp};
+use crate::physics::trial::{FailureStage, simulate_grasp_among};
 
 /// The result of [`success_probability`].
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -122,6 +122,35 @@ pub fn success_probability(
     n_trials: usize,
     seed: u64,
 ) -> Result<SuccessEstimate> {
+    success_probability_among(
+        object,
+        table_from_object,
+        &[],
+        grasp,
+        gripper,
+        (params, noise),
+        n_trials,
+        seed,
+    )
+}
+
+/// [`success_probability`] with other objects on the table (`neighbours`, each resting at its
+/// pose, unperturbed): each trial is [`crate::physics::simulate_grasp_among`]'s, so the object
+/// must come out alone. Without neighbours it is [`success_probability`], trial for trial.
+///
+/// # Errors
+/// See [`success_probability`]; a non-finite neighbour pose.
+#[allow(clippy::too_many_arguments)]
+pub fn success_probability_among(
+    object: &PhysicsObject,
+    table_from_object: &Pose3,
+    neighbours: &[(&PhysicsObject, Pose3)],
+    grasp: &Grasp,
+    gripper: &Gripper,
+    (params, noise): (&PhysicsParams, &PhysicsNoise),
+    n_trials: usize,
+    seed: u64,
+) -> Result<SuccessEstimate> {
     if n_trials == 0 {
         return Err(GraspError::InvalidParameter {
             op: "physics success probability",
@@ -151,7 +180,7 @@ pub fn success_probability(
                 pad_friction: friction,
                 ..gripper.clone()
             };
-            simulate_grasp(object, &placed, &perturbed, &hand, params)
+            simulate_grasp_among(object, &placed, neighbours, &perturbed, &hand, params)
         })
         .collect();
     let mut estimate = SuccessEstimate {
