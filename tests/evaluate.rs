@@ -41,6 +41,7 @@ fn two_objects(dir: &Path) -> EvalConfig {
         clutter_objects: 2,
         clutter_camera: "primesense".into(),
         clutter_distance_m: 0.6,
+        clutter_training_depths: true,
     }
 }
 

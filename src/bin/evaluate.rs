@@ -97,6 +97,11 @@ struct Args {
     /// Their distance from the table's centre, metres (default 0.7).
     #[arg(long)]
     clutter_distance_m: Option<f32>,
+    /// The clutter suite's top-down GQ-CNN sees each grasp's crop as from within its training
+    /// cameras' distances (0.65-0.75 m): the window scaled to the metres it spans there and
+    /// its depths shifted (for cameras nearer or farther than the network was trained at).
+    #[arg(long)]
+    clutter_training_depths: bool,
     /// Plain progress lines even on a terminal.
     #[arg(long)]
     plain: bool,
@@ -173,6 +178,7 @@ fn config_of(args: &Args) -> EvalConfig {
         config.clutter_distance_m = d;
     }
     config.all_poses |= args.all_poses;
+    config.clutter_training_depths |= args.clutter_training_depths;
     config.coverage |= args.coverage;
     config
 }

@@ -161,6 +161,10 @@ pub struct RoundRecord {
     pub attempts: Vec<Attempt>,
 }
 
+/// The depths of the shipped top-down GQ-CNN's training cameras (its dataset's
+/// `radius_m`, `training/configs/datasets/topdown.toml`), metres.
+pub const TRAINING_DEPTHS_M: [f32; 2] = [0.65, 0.75];
+
 /// The rounds' cameras by default: a PhoXi S 0.7 m from the table's centre.
 pub const DEFAULT_CAMERA: (IntrinsicsPreset, f32) = (IntrinsicsPreset::PhoxiS, 0.7);
 
@@ -258,22 +262,27 @@ pub struct ClutterSuite {
 }
 
 impl ClutterSuite {
-    /// The suite over `objects`, loading the shipped top-down GQ-CNN and, when some view
-    /// count is above 1, the multi-view one.
+    /// The suite over `objects`, loading the shipped top-down GQ-CNN (its crops shown as from
+    /// `depth_range_m`, see [`GqcnnPolicy::depth_range_m`]) and, when some view count is above
+    /// 1, the multi-view one.
     ///
     /// # Errors
     /// No objects, or a network that cannot load.
-    pub fn new(objects: &[ObjectRef], views: &[usize]) -> Result<Self> {
+    pub fn new(
+        objects: &[ObjectRef],
+        views: &[usize],
+        depth_range_m: Option<[f32; 2]>,
+    ) -> Result<Self> {
         if objects.is_empty() {
             return Err(Error::Evaluate {
                 problem: "the clutter suite has no objects to draw from".into(),
             });
         }
         let labels = LabelSettings::default();
-        let topdown = Planner::from(GqcnnPolicy::new(
-            models::GQCNN_TOPDOWN.load()?,
-            labels.gripper.max_opening_m,
-        )?);
+        let mut policy =
+            GqcnnPolicy::new(models::GQCNN_TOPDOWN.load()?, labels.gripper.max_opening_m)?;
+        policy.depth_range_m = depth_range_m;
+        let topdown = Planner::from(policy);
         let fused = if views.iter().any(|&n| n > 1) {
             let options = PlanOptions {
                 fuse: true,

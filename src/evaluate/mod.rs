@@ -75,6 +75,10 @@ pub struct EvalConfig {
     /// Its cameras' distance from the table's centre, metres.
     #[serde(default = "clutter_distance_m")]
     pub clutter_distance_m: f32,
+    /// Its top-down GQ-CNN sees each grasp's crop as from within its training cameras'
+    /// distances (0.65 to 0.75 m; [`crate::planner::GqcnnPolicy::depth_range_m`]).
+    #[serde(default)]
+    pub clutter_training_depths: bool,
 }
 
 fn clutter_camera() -> String {
@@ -140,6 +144,7 @@ impl EvalConfig {
             clutter_objects: five(),
             clutter_camera: clutter_camera(),
             clutter_distance_m: clutter_distance_m(),
+            clutter_training_depths: false,
         }
     }
 }
@@ -356,14 +361,25 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
         } else {
             format!("{}@{}|", camera.name(), config.clutter_distance_m)
         };
-        let key = format!("clutter|{}|{views}|{cameras}{round}", scene.name());
+        let depths = if config.clutter_training_depths {
+            "training-depths|"
+        } else {
+            ""
+        };
+        let key = format!("clutter|{}|{views}|{cameras}{depths}{round}", scene.name());
         let mut work = || -> Result<clutter::RoundRecord> {
             if let Some(record) = journal.get(&key)? {
                 return Ok(record);
             }
             let suite = match suite {
                 Some(ref suite) => suite,
-                None => suite.insert(clutter::ClutterSuite::new(&objects, &config.clutter_views)?),
+                None => suite.insert(clutter::ClutterSuite::new(
+                    &objects,
+                    &config.clutter_views,
+                    config
+                        .clutter_training_depths
+                        .then_some(clutter::TRAINING_DEPTHS_M),
+                )?),
             };
             let record = suite.round(
                 &renderer,

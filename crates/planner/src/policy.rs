@@ -35,6 +35,12 @@ pub struct GqcnnPolicy {
     /// Refine each view's candidates by Dex-Net 2.0's cross-entropy method; `None`: score the
     /// sampler's candidates only.
     pub cem: Option<CemParams>,
+    /// The depths of the network's training views, metres (nearest, farthest): a grasp axis
+    /// whose surface lies outside them is shown to the network as from the nearest depth
+    /// inside (its window scaled by the depth ratio so that it spans the metres it would
+    /// there, its depths and the grasp depth shifted by the difference). `None`: crops as
+    /// the camera sees them.
+    pub depth_range_m: Option<[f32; 2]>,
 }
 
 impl GqcnnPolicy {
@@ -63,6 +69,7 @@ impl GqcnnPolicy {
             max_width_m,
             batch: 256,
             cem: None,
+            depth_range_m: None,
         })
     }
 
@@ -251,13 +258,30 @@ impl GqcnnPolicy {
             }
             let mut crops = Vec::with_capacity(axes.len() * side * side);
             let mut poses = Vec::with_capacity(chunk.len() * pose_inputs);
+            // Each axis's shift into the training depths (0 without a range, or inside it).
+            let shifts: Vec<f32> = axes.iter().map(|g| self.depth_shift(filled, g)).collect();
             // The crops in parallel (in order: the same bytes whatever the thread count).
-            crops.par_extend(
-                axes.par_iter()
-                    .flat_map_iter(|g| crop_depth(filled, g.center_px, g.angle_rad, &crop)),
-            );
-            for g in chunk {
-                poses.push(g.depth_m);
+            crops.par_extend(axes.par_iter().zip(&shifts).flat_map_iter(|(g, &shift)| {
+                if shift == 0.0 {
+                    return crop_depth(filled, g.center_px, g.angle_rad, &crop);
+                }
+                let surface = filled.at(g.center_px[0] as i64, g.center_px[1] as i64);
+                // The window that spans at the surface's depth what the training window
+                // spans at the shifted one.
+                let scaled = crate::crop::CropParams {
+                    window_px: ((crop.window_px as f32 * (surface + shift) / surface).round()
+                        as u32)
+                        .max(crop.size_px),
+                    ..crop
+                };
+                let mut cut = crop_depth(filled, g.center_px, g.angle_rad, &scaled);
+                for d in cut.iter_mut().filter(|d| **d > 0.0) {
+                    *d += shift;
+                }
+                cut
+            }));
+            for (g, &axis) in chunk.iter().zip(&image_of) {
+                poses.push(g.depth_m + shifts[axis]);
                 if pose_inputs == 2 {
                     poses.push(theta);
                 }
@@ -270,6 +294,23 @@ impl GqcnnPolicy {
             );
         }
         Ok(quality)
+    }
+}
+
+impl GqcnnPolicy {
+    /// How far `g`'s axis must be moved along the optical axis for its surface to lie in
+    /// [`GqcnnPolicy::depth_range_m`], metres (0 without a range, inside it, or with no depth
+    /// at its centre).
+    fn depth_shift(&self, filled: &DepthImage, g: &ImageGrasp) -> f32 {
+        let Some([near, far]) = self.depth_range_m else {
+            return 0.0;
+        };
+        let surface = filled.at(g.center_px[0] as i64, g.center_px[1] as i64);
+        if surface > 0.0 {
+            surface.clamp(near, far) - surface
+        } else {
+            0.0
+        }
     }
 }
 
@@ -314,6 +355,27 @@ mod tests {
             shared.iter().map(|q| q.to_bits()).collect::<Vec<_>>(),
             alone.iter().map(|q| q.to_bits()).collect::<Vec<_>>()
         );
+    }
+
+    #[test]
+    fn a_depth_range_moves_only_the_axes_outside_it() {
+        let mut policy = GqcnnPolicy::new(GQCNN_TOPDOWN.load().unwrap(), 0.08).unwrap();
+        let view = box_view(false);
+        let grasps = sample_image_grasps(&view.depth, None, 0.08, &policy.sampler, 3);
+        let filled = view.depth.with_holes_filled();
+        let plain = policy.score_on(&view, &filled, &grasps).unwrap();
+        // The box's top is 0.65 m from the camera and the table 0.7 m: a range holding both
+        // changes nothing, to the bit.
+        policy.depth_range_m = Some([0.6, 0.75]);
+        assert!(grasps.iter().all(|g| policy.depth_shift(&filled, g) == 0.0));
+        assert_eq!(policy.score_on(&view, &filled, &grasps).unwrap(), plain);
+        // One beyond them moves each axis to its near end, and the scores change.
+        policy.depth_range_m = Some([0.4, 0.5]);
+        for g in &grasps {
+            let surface = filled.at(g.center_px[0] as i64, g.center_px[1] as i64);
+            assert!((policy.depth_shift(&filled, g) - (0.5 - surface)).abs() < 1e-6);
+        }
+        assert_ne!(policy.score_on(&view, &filled, &grasps).unwrap(), plain);
     }
 
     #[test]
