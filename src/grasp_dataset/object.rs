@@ -300,7 +300,8 @@ fn run_physics(
                 neighbours,
                 &grasp,
                 &resolved.gripper,
-                (&config.physics, &noise),
+                &config.physics,
+                &noise,
                 config.physics_trials,
                 seed(PHYSICS_NOISE, p),
             )

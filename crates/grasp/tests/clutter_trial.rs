@@ -112,14 +112,7 @@ fn the_success_probability_among_neighbours_counts_a_neighbour_that_comes_along(
     let on_it = [(&small, Pose3::from_translation(Vec3::new(0.0, 0.045, 0.03)))];
     let estimate = |neighbours: &[(&PhysicsObject, Pose3)]| {
         mvgrasp_grasp::physics::success_probability_among(
-            &plank,
-            &pose,
-            neighbours,
-            &grasp,
-            &gripper,
-            (&params, &noise),
-            4,
-            7,
+            &plank, &pose, neighbours, &grasp, &gripper, &params, &noise, 4, 7,
         )
         .unwrap()
         .probability

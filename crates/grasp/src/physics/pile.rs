@@ -138,7 +138,7 @@ pub fn drop_pile(
         });
     }
     let (mut world, _table) = table_world(physics);
-    let walls = insert_box(&mut world, pile);
+    let walls = insert_box(&mut world, pile, physics);
     let mut bodies: Vec<Option<RigidBodyHandle>> = Vec::with_capacity(drops.len());
     for drop in drops {
         let turned = Pose3::from_rotation(drop.rotation);
@@ -196,7 +196,7 @@ pub fn settle_objects(
     }
     let (mut world, _table) = table_world(physics);
     if pile.keep_box {
-        insert_box(&mut world, pile);
+        insert_box(&mut world, pile, physics);
     }
     let bodies = objects
         .iter()
@@ -259,22 +259,22 @@ pub fn box_walls(pile: &PileParams) -> [(Vec3, Vec3); 4] {
     ]
 }
 
-/// The box: a fixed body of its four walls.
-fn insert_box(world: &mut PhysicsWorld, pile: &PileParams) -> RigidBodyHandle {
+/// The box: a fixed body of its four walls, gripping like the table.
+fn insert_box(
+    world: &mut PhysicsWorld,
+    pile: &PileParams,
+    physics: &PhysicsParams,
+) -> RigidBodyHandle {
     let body = world.insert_body(RigidBodyBuilder::fixed());
     for (half, centre) in box_walls(pile) {
         world.insert_collider(
-            ColliderBuilder::cuboid(half.x, half.y, half.z).translation(centre),
+            ColliderBuilder::cuboid(half.x, half.y, half.z)
+                .translation(centre)
+                .friction(physics.table_friction),
             Some(body),
         );
     }
     body
-}
-
-/// The lowest and highest z of `object`'s shape at `pose`.
-fn z_extent(object: &PhysicsObject, pose: &Pose3) -> (f32, f32) {
-    let aabb = object.shape().compute_aabb(pose);
-    (aabb.mins.z, aabb.maxs.z)
 }
 
 /// The highest point of the objects dropped so far (0: the table).
@@ -288,7 +288,7 @@ fn highest_point(
         .zip(drops)
         .filter_map(|(slot, drop)| {
             let body = world.bodies.get((*slot)?)?;
-            Some(z_extent(drop.object, body.position()).1)
+            Some(drop.object.shape().compute_aabb(body.position()).maxs.z)
         })
         .fold(0.0, f32::max)
 }

@@ -128,7 +128,8 @@ pub fn success_probability(
         &[],
         grasp,
         gripper,
-        (params, noise),
+        params,
+        noise,
         n_trials,
         seed,
     )
@@ -147,7 +148,8 @@ pub fn success_probability_among(
     neighbours: &[(&PhysicsObject, Pose3)],
     grasp: &Grasp,
     gripper: &Gripper,
-    (params, noise): (&PhysicsParams, &PhysicsNoise),
+    params: &PhysicsParams,
+    noise: &PhysicsNoise,
     n_trials: usize,
     seed: u64,
 ) -> Result<SuccessEstimate> {

@@ -219,7 +219,8 @@ impl Scene {
     }
 
     /// Adds a fixed obstacle at `table_from_object` (a bin's wall): objects and the hand
-    /// collide with it and the approach must clear it, but nothing moves it.
+    /// collide with it and the approach must clear it, but nothing moves it. It grips like the
+    /// table ([`PhysicsParams::table_friction`]).
     pub fn add_fixed(
         &mut self,
         object: &PhysicsObject,
@@ -229,6 +230,12 @@ impl Scene {
         let body = insert_object(&mut self.world, object, table_from_object, params);
         if let Some(b) = self.world.bodies.get_mut(body) {
             b.set_body_type(RigidBodyType::Fixed, true);
+            for &collider in b.colliders() {
+                if let Some(c) = self.world.colliders.get_mut(collider) {
+                    c.set_friction(params.table_friction);
+                    c.set_friction_combine_rule(CoefficientCombineRule::Average);
+                }
+            }
         }
         self.neighbours.push((body, object.surface().clone()));
     }
