@@ -68,8 +68,8 @@ struct Args {
     #[arg(long)]
     coverage: bool,
     /// A suite (repeat): grasps (plans checked in the trial), depth (depth from RGB against
-    /// the rendered depth), clutter (VGN and GIGA's clutter-removal rounds, packed and pile,
-    /// drawn from the object sets). Default: all three.
+    /// the rendered depth), clutter (VGN and GIGA's clutter-removal rounds, packed, pile and
+    /// bin, drawn from the object sets). Default: all three.
     #[arg(long = "suite")]
     suites: Vec<String>,
     /// The depth suite's numbers of input views (default: 1,3,5,9).
@@ -78,7 +78,7 @@ struct Args {
     /// The depth suite's camera distance, metres (default: 0.5, the paper's test views).
     #[arg(long)]
     depth_distance_m: Option<f32>,
-    /// The clutter suite's scenes (packed, pile; default both).
+    /// A clutter scene (repeat): packed, pile, bin (default all three).
     #[arg(long = "clutter-scene")]
     clutter_scenes: Vec<String>,
     /// The clutter suite's numbers of depth views: 1 plans with the top-down GQ-CNN alone, more

@@ -44,7 +44,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use super::objects::ObjectRef;
-use crate::error::{Error, Result};
+use crate::error::{Error, ErrorKind, Result};
 use crate::grasp_dataset::clutter::{ClutterParams, Neighbour, place};
 use crate::planner::{
     DepthImage, GqcnnPolicy, Mask, PlanOptions, Planner, SensorPlanParams, View, models,
@@ -233,22 +233,28 @@ pub fn cameras(views: usize, preset: IntrinsicsPreset, distance: f32) -> Result<
     Ok(cameras)
 }
 
-/// An object of the pool, built on first use: its mesh, hand-check shape and poses, and its
-/// shapes for the trial.
+/// An object of the pool, built on first use: its mesh, hand-check shape, poses and trial
+/// shapes.
 struct PoolObject {
     name: String,
-    built: OnceCell<Result<(Rc<Neighbour>, Rc<PhysicsObject>)>>,
+    built: OnceCell<Result<Rc<Neighbour>>>,
 }
 
-/// An object drawn for a round: its name, its mesh and hand-check shape, its trial shapes.
-type Drawn = (String, Rc<Neighbour>, Rc<PhysicsObject>);
+/// An object drawn for a round: its name, its mesh, hand-check and trial shapes.
+type Drawn = (String, Rc<Neighbour>);
 
 /// One object on the table.
 struct OnTable {
     name: String,
     shape: Rc<Neighbour>,
-    physics: Rc<PhysicsObject>,
     pose: Pose3,
+}
+
+impl OnTable {
+    /// Its trial shapes (built, and checked, when it was drawn).
+    fn physics(&self, labels: &LabelSettings) -> Result<&PhysicsObject> {
+        self.shape.physics(&labels.physics_shape)
+    }
 }
 
 /// The suite's planners, cameras and object pool, built once per evaluation.
@@ -257,8 +263,9 @@ pub struct ClutterSuite {
     labels: LabelSettings,
     topdown: Planner,
     fused: Option<(Planner, SensorPlanParams)>,
-    /// The bin's walls: each one's mesh where it stands and its trial shape.
-    walls: Vec<(TriangleMesh, PhysicsObject)>,
+    /// The bin's walls: each one's mesh where it stands, its trial shape (centred) and where
+    /// that stands.
+    walls: Vec<(TriangleMesh, PhysicsObject, Pose3)>,
 }
 
 impl ClutterSuite {
@@ -299,7 +306,8 @@ impl ClutterSuite {
                 let (vertices, triangles) = parry3d::shape::Cuboid::new(half).to_trimesh();
                 let mesh = TriangleMesh::new(vertices, triangles)?;
                 let physics = PhysicsObject::new(&mesh, &labels.physics_shape)?;
-                Ok((mesh.transformed(&Pose3::from_translation(centre)), physics))
+                let pose = Pose3::from_translation(centre);
+                Ok((mesh.transformed(&pose), physics, pose))
             })
             .collect::<Result<_>>()?;
         Ok(Self {
@@ -326,12 +334,11 @@ impl ClutterSuite {
         let (object, entry) = &self.pool[i];
         let built = entry.built.get_or_init(|| {
             let neighbour = Neighbour::new(object.load()?)?;
-            let physics =
-                PhysicsObject::from_grasp_object(neighbour.object(), &self.labels.physics_shape)?;
-            Ok((Rc::new(neighbour), Rc::new(physics)))
+            neighbour.physics(&self.labels.physics_shape)?;
+            Ok(Rc::new(neighbour))
         });
-        let (shape, physics) = built.as_ref().ok()?;
-        Some((entry.name.clone(), Rc::clone(shape), Rc::clone(physics)))
+        let shape = built.as_ref().ok()?;
+        Some((entry.name.clone(), Rc::clone(shape)))
     }
 
     /// The objects of the pool that could not be built so far, and why.
@@ -389,12 +396,10 @@ impl ClutterSuite {
         };
         let cameras = cameras(views, camera, distance_m)?;
         let pile = scene.pile_params();
-        // The walls stand in the trial where the meshes were (their shapes are centred).
         let fixed: Vec<(&PhysicsObject, Pose3)> = if scene == ClutterScene::Bin {
-            box_walls(&pile)
+            self.walls
                 .iter()
-                .zip(&self.walls)
-                .map(|((_, centre), (_, physics))| (physics, Pose3::from_translation(*centre)))
+                .map(|(_, physics, pose)| (physics, *pose))
                 .collect()
         } else {
             Vec::new()
@@ -433,10 +438,10 @@ impl ClutterSuite {
                 .iter()
                 .enumerate()
                 .filter(|(i, _)| *i != target)
-                .map(|(_, o)| (o.physics.as_ref(), o.pose))
-                .collect();
+                .map(|(_, o)| Ok((o.physics(&self.labels)?, o.pose)))
+                .collect::<Result<_>>()?;
             let trial = simulate_grasp_in_scene(
-                &table[target].physics,
+                table[target].physics(&self.labels)?,
                 &table[target].pose,
                 &others,
                 &fixed,
@@ -494,7 +499,7 @@ impl ClutterSuite {
             .map(|o| o.shape.mesh().transformed(&o.pose))
             .collect();
         if walls {
-            parts.extend(self.walls.iter().map(|(mesh, _)| mesh.clone()));
+            parts.extend(self.walls.iter().map(|(mesh, ..)| mesh.clone()));
         }
         let merged = TriangleMesh::concatenate(&parts, parts[0].origin())?;
         let depths = render_depths(renderer, &merged, &Pose3::IDENTITY, cameras)?;
@@ -518,17 +523,13 @@ impl ClutterSuite {
             });
         }
         let gripper = &self.labels.gripper;
-        // A plan that finds nothing (no table, no candidate) is the round's end, as VGN's
-        // "no grasp detected".
-        let best = match (&self.fused, views.len()) {
+        let planned = match (&self.fused, views.len()) {
             (Some((planner, params)), n) if n > 1 => {
                 let params = SensorPlanParams {
                     seed,
                     ..params.clone()
                 };
-                plan_on_views(planner, gripper, views, &params)
-                    .ok()
-                    .and_then(|r| r.best)
+                plan_on_views(planner, gripper, views, &params).map(|r| r.best)
             }
             _ => {
                 let params = SensorPlanParams {
@@ -538,18 +539,23 @@ impl ClutterSuite {
                 let view = views.into_iter().next().ok_or(Error::Evaluate {
                     problem: "a clutter round with no view".into(),
                 })?;
-                plan_on_view(&self.topdown, gripper, view, true, &params)
-                    .ok()
-                    .and_then(|r| r.best)
+                plan_on_view(&self.topdown, gripper, view, true, &params).map(|r| r.best)
             }
         };
-        Ok(best.map(|b| (b.quality, b.grasp)))
+        // A plan that finds nothing (no table, nothing on it, no candidate left) ends the
+        // round, as VGN's "no grasp detected"; any other error (a network, a render) is the
+        // evaluation's.
+        match planned {
+            Ok(best) => Ok(best.map(|b| (b.quality, b.grasp))),
+            Err(e) if e.kind() == ErrorKind::Planning => Ok(None),
+            Err(e) => Err(e),
+        }
     }
 
     /// `drawn` packed on the table: the first at the origin in its most probable resting pose,
     /// the rest around it.
     fn pack(&self, objects: &[Drawn], rng: &mut ChaCha8Rng) -> Result<Vec<OnTable>> {
-        let shapes: Vec<Rc<Neighbour>> = objects.iter().map(|(_, s, _)| Rc::clone(s)).collect();
+        let shapes: Vec<Rc<Neighbour>> = objects.iter().map(|(_, s)| Rc::clone(s)).collect();
         let first_pose = shapes[0].most_probable_pose();
         let others = objects.len() - 1;
         let params = ClutterParams {
@@ -577,12 +583,14 @@ impl ClutterSuite {
     ) -> Result<Vec<OnTable>> {
         let drops: Vec<Drop<'_>> = objects
             .iter()
-            .map(|(_, _, physics)| Drop {
-                object: physics,
-                rotation: random_rotation(rng),
-                xy: [rng.random_range(-0.05..0.05), rng.random_range(-0.05..0.05)],
+            .map(|(_, shape)| {
+                Ok(Drop {
+                    object: shape.physics(&self.labels.physics_shape)?,
+                    rotation: random_rotation(rng),
+                    xy: [rng.random_range(-0.05..0.05), rng.random_range(-0.05..0.05)],
+                })
             })
-            .collect();
+            .collect::<Result<_>>()?;
         let rested = drop_pile(&drops, &scene.pile_params(), &self.labels.physics)?;
         Ok(objects
             .iter()
@@ -593,8 +601,10 @@ impl ClutterSuite {
 
     /// Lets `table` rest (after an object was taken away); the number that left the workspace.
     fn settle(&self, table: &mut Vec<OnTable>, pile: &PileParams) -> Result<usize> {
-        let objects: Vec<(&PhysicsObject, Pose3)> =
-            table.iter().map(|o| (o.physics.as_ref(), o.pose)).collect();
+        let objects: Vec<(&PhysicsObject, Pose3)> = table
+            .iter()
+            .map(|o| Ok((o.physics(&self.labels)?, o.pose)))
+            .collect::<Result<_>>()?;
         let rested = settle_objects(&objects, pile, &self.labels.physics)?;
         let before = table.len();
         let mut kept = Vec::with_capacity(before);
@@ -612,7 +622,6 @@ fn on_table(object: &Drawn, pose: Pose3) -> OnTable {
     OnTable {
         name: object.0.clone(),
         shape: Rc::clone(&object.1),
-        physics: Rc::clone(&object.2),
         pose,
     }
 }

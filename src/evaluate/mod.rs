@@ -58,7 +58,7 @@ pub struct EvalConfig {
     #[serde(default = "paper_distance_m")]
     pub depth_distance_m: f32,
     /// The clutter suite's scenes ([`clutter::SCENES`]).
-    #[serde(default = "both_scenes")]
+    #[serde(default = "every_scene")]
     pub clutter_scenes: Vec<String>,
     /// Its numbers of depth views (1: the top-down GQ-CNN alone; more: fused).
     #[serde(default = "one_view")]
@@ -89,7 +89,7 @@ fn clutter_distance_m() -> f32 {
     clutter::DEFAULT_CAMERA.1
 }
 
-fn both_scenes() -> Vec<String> {
+fn every_scene() -> Vec<String> {
     clutter::SCENES.map(String::from).to_vec()
 }
 
@@ -138,7 +138,7 @@ impl EvalConfig {
             suites: SUITES.map(String::from).to_vec(),
             depth_views: paper_shots(),
             depth_distance_m: paper_distance_m(),
-            clutter_scenes: both_scenes(),
+            clutter_scenes: every_scene(),
             clutter_views: one_view(),
             clutter_rounds: small_rounds(),
             clutter_objects: five(),
@@ -354,19 +354,17 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
     // The clutter suite's planners and objects, built only when a round is missing.
     let mut suite: Option<clutter::ClutterSuite> = None;
     let before = total - rounds.len();
+    // A round's key names its cameras and crops unless they are the defaults (the first
+    // rounds were recorded so).
+    let mut setting = String::new();
+    if (camera, config.clutter_distance_m) != clutter::DEFAULT_CAMERA {
+        setting.push_str(&format!("{}@{}|", camera.name(), config.clutter_distance_m));
+    }
+    if config.clutter_training_depths {
+        setting.push_str("training-depths|");
+    }
     for (done, &(scene, views, round)) in rounds.iter().enumerate() {
-        // The default cameras' keys carry no camera (the first rounds were recorded so).
-        let cameras = if (camera, config.clutter_distance_m) == clutter::DEFAULT_CAMERA {
-            String::new()
-        } else {
-            format!("{}@{}|", camera.name(), config.clutter_distance_m)
-        };
-        let depths = if config.clutter_training_depths {
-            "training-depths|"
-        } else {
-            ""
-        };
-        let key = format!("clutter|{}|{views}|{cameras}{depths}{round}", scene.name());
+        let key = format!("clutter|{}|{views}|{setting}{round}", scene.name());
         let mut work = || -> Result<clutter::RoundRecord> {
             if let Some(record) = journal.get(&key)? {
                 return Ok(record);

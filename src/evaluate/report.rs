@@ -163,7 +163,7 @@ pub fn markdown(results: &Results) -> String {
         depth_tables(&mut md, results);
     }
     if !results.clutter.is_empty() {
-        clutter_table(&mut md, &results.clutter);
+        clutter_table(&mut md, results);
     }
     if results.grasps.is_empty() {
         return md;
@@ -519,21 +519,29 @@ fn depth_tables(md: &mut String, results: &Results) {
 
 /// The clutter suite's table: per scene and number of views, success and cleared with their
 /// intervals, how the rounds ended, and GIGA's published figures beside.
-fn clutter_table(md: &mut String, rounds: &[super::clutter::RoundRecord]) {
+fn clutter_table(md: &mut String, results: &Results) {
     use super::clutter::{ClutterScene, Outcome};
+    let rounds = &results.clutter;
     let _ = writeln!(
         md,
         "## Clutter\n\nVGN and GIGA's clutter removal in mvgrasp's trial: each round sets {} \
-         objects from the evaluation's sets packed side by side or dropped in a pile, and grasps \
-         until the table is empty, two grasps in a row fail or no grasp is found, planned on \
-         rendered depth without a mask (1 view: the top-down GQ-CNN; more: the multi-view \
-         planner fusing them). Success: held of grasps tried; cleared: held of the objects set \
-         (less those that would not rest, taken away uncounted; those that fell out of the \
-         workspace as the rest settled count as not cleared). Intervals: Wilson, 95%, over \
-         grasps and over objects (rounds are not independent draws of either). Published, in \
-         their own simulator (pybullet) and objects: GIGA 87.9% success packed, 69.8% pile. \
-         Simulators differ: these figures are not a ranking.\n",
-        rounds.iter().map(|r| r.objects).max().unwrap_or(0)
+         objects from the evaluation's sets packed side by side, dropped in a pile (the box \
+         taken away) or into a bin (its walls seen and in the trial), and grasps until the table \
+         is empty, two grasps in a row fail or no grasp is found, planned on rendered depth (1 \
+         view: the top-down GQ-CNN; more: the multi-view planner fusing them) without a mask, \
+         or in the bin with its inside as the workspace mask{}. Success: held of grasps tried; \
+         cleared: held of the objects set (less those that would not rest, taken away \
+         uncounted; those that fell out of the workspace as the rest settled, and those left \
+         when a round ended, count as not cleared). Intervals: Wilson, 95%, over grasps and \
+         over objects (rounds are not independent draws of either). Published, in their own \
+         simulator (pybullet) and objects: GIGA 87.9% success packed, 69.8% pile. Simulators \
+         differ: these figures are not a ranking.\n",
+        rounds.iter().map(|r| r.objects).max().unwrap_or(0),
+        if results.config.clutter_training_depths {
+            "; the top-down GQ-CNN's crops shown as from its training cameras' depths"
+        } else {
+            ""
+        }
     );
     let _ = writeln!(
         md,

@@ -91,7 +91,7 @@ pub struct Neighbour {
     mesh: TriangleMesh,
     object: GraspObject,
     poses: Vec<(f32, Pose3)>,
-    physics: std::sync::OnceLock<std::result::Result<PhysicsObject, String>>,
+    physics: std::sync::OnceLock<PhysicsObject>,
 }
 
 impl Neighbour {
@@ -108,16 +108,13 @@ impl Neighbour {
     /// Its shapes for the trial, built with `shape` on first use (one dataset, one `shape`).
     ///
     /// # Errors
-    /// A mesh the trial's shapes cannot be built from.
+    /// A mesh the trial's shapes cannot be built from (tried again on the next call).
     pub fn physics(&self, shape: &ShapeParams) -> Result<&PhysicsObject> {
-        self.physics
-            .get_or_init(|| {
-                PhysicsObject::from_grasp_object(&self.object, shape).map_err(|e| e.to_string())
-            })
-            .as_ref()
-            .map_err(|problem| Error::Evaluate {
-                problem: format!("a neighbour's trial shapes: {problem}"),
-            })
+        if let Some(built) = self.physics.get() {
+            return Ok(built);
+        }
+        let built = PhysicsObject::from_grasp_object(&self.object, shape)?;
+        Ok(self.physics.get_or_init(|| built))
     }
 
     /// Its most probable steady resting pose.
