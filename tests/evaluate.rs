@@ -42,6 +42,7 @@ fn two_objects(dir: &Path) -> EvalConfig {
         clutter_camera: "primesense".into(),
         clutter_distance_m: 0.6,
         clutter_training_depths: true,
+        clutter_depth_from: None,
     }
 }
 
@@ -163,6 +164,16 @@ fn a_folder_of_another_runs_settings_and_an_unknown_policy_are_refused_by_name()
             "0",
             "clutter objects 0: a round needs at least one",
         ),
+        (
+            "--clutter-depth-from",
+            "baseline",
+            "clutter views 1 with depth from RGB (baseline): predicting depth needs at least 2 views",
+        ),
+        (
+            "--clutter-depth-from",
+            "sweep",
+            "clutter depth from \"sweep\", expected baseline, refined, mvs or lsm",
+        ),
     ] {
         // Two share a folder: a refused run writes no settings there.
         let refused = run(&[
@@ -177,4 +188,34 @@ fn a_folder_of_another_runs_settings_and_an_unknown_policy_are_refused_by_name()
         assert_eq!(refused.status.code(), Some(2), "{message}");
         assert!(message.contains(expected), "{flag}: {message}");
     }
+}
+
+#[test]
+fn clutter_rounds_plan_on_depth_predicted_from_colour_views() {
+    if crate::common::renderer().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let config = EvalConfig {
+        suites: vec!["clutter".into()],
+        clutter_scenes: vec!["packed".into()],
+        clutter_views: vec![3],
+        clutter_depth_from: Some("baseline".into()),
+        clutter_camera: "phoxi_s".into(),
+        clutter_distance_m: 0.7,
+        clutter_training_depths: false,
+        ..two_objects(dir.path())
+    };
+    let out = dir.path().join("rgb");
+    let results = evaluate(&config, &out, &mut Quiet).unwrap();
+    assert_eq!(results.clutter.len(), 1, "{:?}", results.skipped);
+    let round = &results.clutter[0];
+    assert_eq!(round.depth_from.as_deref(), Some("baseline"));
+    // The sweep's depth is good enough to plan on: the round tries grasps, and one holds.
+    assert!(round.tried() > 0 && round.held() > 0, "{round:?}");
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(
+        report.contains("| packed | 3 | phoxi_s 0.70 m | RGB, baseline | 1 |"),
+        "{report}"
+    );
 }

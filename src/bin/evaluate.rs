@@ -102,6 +102,12 @@ struct Args {
     /// its depths shifted (for cameras nearer or farther than the network was trained at).
     #[arg(long)]
     clutter_training_depths: bool,
+    /// The clutter suite's depth from RGB views instead of rendered depth, by this method:
+    /// baseline (the plane sweep, as the default run), refined, mvs or lsm. The objects are
+    /// rendered in random colours and the method given the foreground as its masks; every
+    /// --clutter-views at least 2.
+    #[arg(long)]
+    clutter_depth_from: Option<String>,
     /// Plain progress lines even on a terminal.
     #[arg(long)]
     plain: bool,
@@ -176,6 +182,9 @@ fn config_of(args: &Args) -> EvalConfig {
     }
     if let Some(d) = args.clutter_distance_m {
         config.clutter_distance_m = d;
+    }
+    if let Some(from) = &args.clutter_depth_from {
+        config.clutter_depth_from = Some(from.clone());
     }
     config.all_poses |= args.all_poses;
     config.clutter_training_depths |= args.clutter_training_depths;

@@ -16,9 +16,13 @@
 //! objects are what stands on the fitted table): 1 view is the top-down PhoXi S 0.7 m above
 //! the table, planned by the top-down GQ-CNN alone (`plan --no-fuse` on a depth image); more
 //! views add cameras 50 degrees up around the scene, 0.7 m away, fused by the multi-view
-//! planner (`plan --views-dir`). The grasp is tried in rapier among the others
-//! ([`mvgrasp_grasp::physics::simulate_grasp_among`]) on the object nearest its centre; it
-//! must come out alone. A held object is taken away and the rest settle (and what leaves the
+//! planner (`plan --views-dir`). With a depth-from-RGB method (`--clutter-depth-from`) each
+//! view's depth is predicted from colour views instead, as `plan --rgb` predicts it: the
+//! objects (and the bin's walls) in random colours on the grey table, the method given the
+//! foreground (what is not the table, as a picker that knows its empty table tells apart)
+//! as its masks, the planner still none; depth from RGB needs 2 views or more. The grasp is
+//! tried in rapier among the others ([`mvgrasp_grasp::physics::simulate_grasp_among`]) on
+//! the object nearest its centre; it must come out alone. A held object is taken away and the rest settle (and what leaves the
 //! workspace goes, uncleared), as VGN's simulator does; after a failure the scene is as it
 //! was (VGN carries the failed grasp's pushes to the next) and the next attempt samples with
 //! the next seed. When the object does not stay at rest before the hand comes (the trial's
@@ -44,11 +48,12 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use super::objects::ObjectRef;
+use crate::depth_from_rgb::checked;
 use crate::error::{Error, ErrorKind, Result};
 use crate::grasp_dataset::clutter::{ClutterParams, Neighbour, place};
 use crate::planner::{
-    DepthImage, GqcnnPolicy, Mask, PlanOptions, Planner, SensorPlanParams, View, models,
-    plan_on_view, plan_on_views,
+    DepthFrom, DepthImage, DepthPredictor, GqcnnPolicy, Mask, PlanOptions, Planner, RgbInput,
+    SensorPlanParams, View, models, plan_on_view, plan_on_views, render_rgb,
 };
 use crate::scene::render_depths;
 
@@ -153,6 +158,10 @@ pub struct RoundRecord {
     /// Their distance from the table's centre, metres.
     #[serde(default = "seventy_cm")]
     pub distance_m: f32,
+    /// The depth-from-RGB method that predicted the views' depth (`plan --depth-from`'s
+    /// name); `None`: rendered depth.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub depth_from: Option<String>,
     /// Objects on the table once the scene was set (a pile's that fell out not counted).
     pub objects: usize,
     /// Objects that left the workspace as the others settled after a grasp (not cleared).
@@ -263,6 +272,8 @@ pub struct ClutterSuite {
     labels: LabelSettings,
     topdown: Planner,
     fused: Option<(Planner, SensorPlanParams)>,
+    /// Depth from RGB views instead of rendered depth.
+    rgb: Option<RgbInput>,
     /// The bin's walls: each one's mesh where it stands, its trial shape (centred) and where
     /// that stands.
     walls: Vec<(TriangleMesh, PhysicsObject, Pose3)>,
@@ -270,8 +281,9 @@ pub struct ClutterSuite {
 
 impl ClutterSuite {
     /// The suite over `objects`, loading the shipped top-down GQ-CNN (its crops shown as from
-    /// `depth_range_m`, see [`GqcnnPolicy::depth_range_m`]) and, when some view count is above
-    /// 1, the multi-view one.
+    /// `depth_range_m`, see [`GqcnnPolicy::depth_range_m`]), when some view count is above
+    /// 1 the multi-view one, and with `depth_from` that depth-from-RGB method (its views'
+    /// depth predicted from colour views, as the fused planner of `plan --rgb` takes it).
     ///
     /// # Errors
     /// No objects, or a network that cannot load.
@@ -279,6 +291,7 @@ impl ClutterSuite {
         objects: &[ObjectRef],
         views: &[usize],
         depth_range_m: Option<[f32; 2]>,
+        depth_from: Option<DepthFrom>,
     ) -> Result<Self> {
         if objects.is_empty() {
             return Err(Error::Evaluate {
@@ -325,6 +338,15 @@ impl ClutterSuite {
             labels,
             topdown,
             fused,
+            rgb: depth_from
+                .map(|from| {
+                    Ok::<_, Error>(RgbInput {
+                        depth: DepthPredictor::shipped(from)?,
+                        per_face: false,
+                        photo: false,
+                    })
+                })
+                .transpose()?,
         })
     }
 
@@ -412,6 +434,10 @@ impl ClutterSuite {
             round,
             camera: camera.name().to_string(),
             distance_m,
+            depth_from: self
+                .rgb
+                .as_ref()
+                .map(|rgb| rgb.depth.kind().name().to_string()),
             objects: table.len(),
             fell_out: 0,
             attempts: Vec::new(),
@@ -420,7 +446,7 @@ impl ClutterSuite {
         while !table.is_empty() && failures_in_a_row < 2 {
             let objects_left = table.len();
             let Some((quality, grasp)) =
-                self.plan(renderer, &table, !fixed.is_empty(), &cameras, seed)?
+                self.plan(renderer, &table, !fixed.is_empty(), &cameras, (round, seed))?
             else {
                 record.attempts.push(Attempt {
                     object: None,
@@ -484,15 +510,16 @@ impl ClutterSuite {
         Ok(record)
     }
 
-    /// The best grasp planned on `table` (in the bin, with `walls`) seen from `cameras`, and
-    /// its quality.
+    /// The best grasp planned on `table` (in the bin, with `walls`) seen from `cameras` with
+    /// `seed` in round `round` (which, with the seed, colours the objects for depth from RGB),
+    /// and its quality.
     fn plan(
         &self,
         renderer: &Renderer,
         table: &[OnTable],
         walls: bool,
         cameras: &[Camera],
-        seed: u64,
+        (round, seed): (usize, u64),
     ) -> Result<Option<(f32, mvgrasp_grasp::Grasp)>> {
         let mut parts: Vec<TriangleMesh> = table
             .iter()
@@ -502,7 +529,26 @@ impl ClutterSuite {
             parts.extend(self.walls.iter().map(|(mesh, ..)| mesh.clone()));
         }
         let merged = TriangleMesh::concatenate(&parts, parts[0].origin())?;
-        let depths = render_depths(renderer, &merged, &Pose3::IDENTITY, cameras)?;
+        let depths = match &self.rgb {
+            None => render_depths(renderer, &merged, &Pose3::IDENTITY, cameras)?,
+            Some(rgb) => {
+                let colours = ((round as u64) << 32) ^ seed;
+                // The foreground (objects and walls: what is not the table) is the method's
+                // masks, as a picker that knows its empty table tells them apart; the planner
+                // gets none, as on rendered depth.
+                let views: Vec<_> =
+                    render_rgb(renderer, &merged, &Pose3::IDENTITY, cameras, rgb, colours)?
+                        .into_iter()
+                        .map(|(view, _)| view)
+                        .collect();
+                let predicted = checked(&rgb.depth, &views)?;
+                cameras
+                    .iter()
+                    .zip(predicted)
+                    .map(|(camera, p)| DepthImage::new(camera.intrinsics, p.depth_m))
+                    .collect::<mvgrasp_planner::Result<_>>()?
+            }
+        };
         let inside = ClutterScene::Bin.pile_params().box_half_side_m - BIN_MARGIN_M;
         let mut views = Vec::with_capacity(cameras.len());
         for (camera, depth) in cameras.iter().zip(depths) {

@@ -24,6 +24,7 @@ use mvgrasp_render::Renderer;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
+use crate::planner::DepthFrom;
 use grasps::{EvalPolicy, GraspRecord, PlacedObject, PoseKind, ReadyPolicy};
 use journal::Journal;
 use objects::{ObjectRef, ObjectSet};
@@ -79,6 +80,12 @@ pub struct EvalConfig {
     /// distances (0.65 to 0.75 m; [`crate::planner::GqcnnPolicy::depth_range_m`]).
     #[serde(default)]
     pub clutter_training_depths: bool,
+    /// Its depth from RGB: a `plan --depth-from` method (`baseline`, `refined`, `mvs`, `lsm`)
+    /// predicting every view's depth from colour views of the scene (the objects in random
+    /// colours on the grey table), given the foreground (what is not the table) as its masks,
+    /// the planner still none; every number of views at least 2. `None`: rendered depth.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub clutter_depth_from: Option<String>,
 }
 
 fn clutter_camera() -> String {
@@ -145,6 +152,7 @@ impl EvalConfig {
             clutter_camera: clutter_camera(),
             clutter_distance_m: clutter_distance_m(),
             clutter_training_depths: false,
+            clutter_depth_from: None,
         }
     }
 }
@@ -236,6 +244,22 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
         return Err(invalid(format!(
             "clutter distance {} m: expected 0.3 to 1.5",
             config.clutter_distance_m
+        )));
+    }
+    let clutter_depth_from: Option<DepthFrom> = match &config.clutter_depth_from {
+        Some(name) => Some(
+            name.parse()
+                .map_err(|e| invalid(format!("clutter depth from {e}")))?,
+        ),
+        None => None,
+    };
+    if let (Some(from), Some(n)) = (
+        clutter_depth_from,
+        config.clutter_views.iter().find(|n| **n < 2),
+    ) {
+        return Err(invalid(format!(
+            "clutter views {n} with depth from RGB ({}): predicting depth needs at least 2 views",
+            from.name()
         )));
     }
     // Written only once the settings are known good: a refused run leaves no config behind.
@@ -363,6 +387,9 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
     if config.clutter_training_depths {
         setting.push_str("training-depths|");
     }
+    if let Some(from) = clutter_depth_from {
+        setting.push_str(&format!("rgb-{}|", from.name()));
+    }
     for (done, &(scene, views, round)) in rounds.iter().enumerate() {
         let key = format!("clutter|{}|{views}|{setting}{round}", scene.name());
         let mut work = || -> Result<clutter::RoundRecord> {
@@ -377,6 +404,7 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
                     config
                         .clutter_training_depths
                         .then_some(clutter::TRAINING_DEPTHS_M),
+                    clutter_depth_from,
                 )?),
             };
             let record = suite.round(

@@ -520,16 +520,18 @@ fn depth_tables(md: &mut String, results: &Results) {
 /// The clutter suite's table: per scene and number of views, success and cleared with their
 /// intervals, how the rounds ended, and GIGA's published figures beside.
 fn clutter_table(md: &mut String, results: &Results) {
-    use super::clutter::{ClutterScene, Outcome};
+    use super::clutter::Outcome;
     let rounds = &results.clutter;
     let _ = writeln!(
         md,
         "## Clutter\n\nVGN and GIGA's clutter removal in mvgrasp's trial: each round sets {} \
          objects from the evaluation's sets packed side by side, dropped in a pile (the box \
          taken away) or into a bin (its walls seen and in the trial), and grasps until the table \
-         is empty, two grasps in a row fail or no grasp is found, planned on rendered depth (1 \
-         view: the top-down GQ-CNN; more: the multi-view planner fusing them) without a mask, \
-         or in the bin with its inside as the workspace mask{}. Success: held of grasps tried; \
+         is empty, two grasps in a row fail or no grasp is found, planned on rendered depth or \
+         on depth predicted from colour views (the objects in random colours, the method given \
+         the foreground as its masks) by the method named (1 view: the top-down GQ-CNN; more: \
+         the multi-view planner fusing them), without a mask, or in the bin with its inside as \
+         the workspace mask{}. Success: held of grasps tried; \
          cleared: held of the objects set (less those that would not rest, taken away \
          uncounted; those that fell out of the workspace as the rest settled, and those left \
          when a round ended, count as not cleared). Intervals: Wilson, 95%, over grasps and \
@@ -545,29 +547,24 @@ fn clutter_table(md: &mut String, results: &Results) {
     );
     let _ = writeln!(
         md,
-        "| scene | views | cameras | rounds | objects | grasps | success | cleared | ended with no grasp | failures by phase | fell out | uncounted |\n|---|---|---|---|---|---|---|---|---|---|---|---|"
+        "| scene | views | cameras | depth | rounds | objects | grasps | success | cleared | ended with no grasp | failures by phase | fell out | uncounted |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
-    let mut keys: Vec<(ClutterScene, usize, String)> = rounds
-        .iter()
-        .map(|r| {
-            (
-                r.scene,
-                r.views,
-                format!("{} {:.2} m", r.camera, r.distance_m),
-            )
-        })
-        .collect();
+    let key = |r: &super::clutter::RoundRecord| {
+        (
+            r.scene,
+            r.views,
+            format!("{} {:.2} m", r.camera, r.distance_m),
+            r.depth_from
+                .as_ref()
+                .map_or_else(|| "rendered".to_string(), |m| format!("RGB, {m}")),
+        )
+    };
+    let mut keys: Vec<_> = rounds.iter().map(key).collect();
     keys.sort();
     keys.dedup();
-    for (scene, views, cameras) in keys {
-        let of: Vec<_> = rounds
-            .iter()
-            .filter(|r| {
-                r.scene == scene
-                    && r.views == views
-                    && format!("{} {:.2} m", r.camera, r.distance_m) == cameras
-            })
-            .collect();
+    for k in keys {
+        let of: Vec<_> = rounds.iter().filter(|r| key(r) == k).collect();
+        let (scene, views, cameras, depth) = k;
         let sum = |f: &dyn Fn(&super::clutter::RoundRecord) -> usize| -> usize {
             of.iter().map(|r| f(r)).sum()
         };
@@ -611,7 +608,7 @@ fn clutter_table(md: &mut String, results: &Results) {
         };
         let _ = writeln!(
             md,
-            "| {} | {views} | {cameras} | {} | {objects} | {tried} | {} | {} | {no_grasp} | {phases} | {} | {unsettled} |",
+            "| {} | {views} | {cameras} | {depth} | {} | {objects} | {tried} | {} | {} | {no_grasp} | {phases} | {} | {unsettled} |",
             scene.name(),
             of.len(),
             rate(held, tried),
