@@ -12,11 +12,13 @@
 
 pub mod cli;
 pub mod dataset;
+pub mod error;
 pub mod evaluate;
 pub mod grasp_dataset;
 
+pub use error::{Error, ErrorKind, Result, RuntimeError};
 pub use mvgrasp_runtime::{
-    Error, ErrorKind, ObjectReport, ReportParams, Result, convert, depth_from_rgb, error, geometry,
-    grasp, grasp_image, grasps_file, images, infer, lsm, mcap_log, mvs, planner, render, report,
-    scene, sensor_files, stereo, sweep_refiner,
+    ObjectReport, ReportParams, convert, depth_from_rgb, geometry, grasp, grasp_image, grasps_file,
+    images, infer, lsm, mcap_log, mvs, planner, render, report, scene, sensor_files, stereo,
+    sweep_refiner,
 };

@@ -17,7 +17,7 @@
 //! raises Python's own `ValueError`.
 
 use mvgrasp::grasp::GraspError as RustGraspError;
-use mvgrasp::{Error, ErrorKind};
+use mvgrasp::{Error, ErrorKind, RuntimeError};
 use mvgrasp_geometry::GeometryError;
 use pyo3::PyErr;
 use pyo3::create_exception;
@@ -98,7 +98,8 @@ pub(crate) fn grasp_error(error: RustGraspError) -> PyErr {
 
 /// Maps an error of a dataset function: as [`pipeline_error`], except that a file that cannot
 /// be read or written is a `DatasetError` too.
-pub(crate) fn dataset_error(error: Error) -> PyErr {
+pub(crate) fn dataset_error(error: impl Into<Error>) -> PyErr {
+    let error = error.into();
     match error.kind() {
         ErrorKind::Io => DatasetError::new_err(error.to_string()),
         _ => pipeline_error(error),
@@ -107,12 +108,13 @@ pub(crate) fn dataset_error(error: Error) -> PyErr {
 
 /// Maps a pipeline error onto the tree by the Rust error's kind ([`Error::kind`]), always with
 /// its message; a geometry error as [`mesh_error`] does.
-pub(crate) fn pipeline_error(error: Error) -> PyErr {
+pub(crate) fn pipeline_error(error: impl Into<Error>) -> PyErr {
+    let error = error.into();
     let message = error.to_string();
     match (error.kind(), error) {
-        (_, Error::Geometry(e)) => mesh_error(e),
-        (_, Error::Grasp(e)) => grasp_error(e),
-        (_, Error::PlanOption { .. }) => PyValueError::new_err(message),
+        (_, Error::Runtime(RuntimeError::Geometry(e))) => mesh_error(e),
+        (_, Error::Runtime(RuntimeError::Grasp(e))) => grasp_error(e),
+        (_, Error::Runtime(RuntimeError::PlanOption { .. })) => PyValueError::new_err(message),
         (ErrorKind::Rendering, _) => RenderError::new_err(message),
         (ErrorKind::Weights, _) => WeightsError::new_err(message),
         (ErrorKind::Planning, _) => PlanningError::new_err(message),

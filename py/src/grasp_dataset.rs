@@ -103,11 +103,7 @@ pub(crate) fn generate_grasp_shard<'py>(
     let plan = plan(config, meshes, per_category, categories, library_seed)?;
     let backend = backend_of(backend)?;
     let record = py.detach(|| -> mvgrasp::Result<_> {
-        std::fs::create_dir_all(&out).map_err(|source| mvgrasp::Error::Io {
-            op: "create",
-            source,
-            path: out.clone(),
-        })?;
+        std::fs::create_dir_all(&out).map_err(mvgrasp::Error::io("create", &out))?;
         let renderer = Renderer::new(backend)?;
         generate_shard(&renderer, &plan, &out, shard)
     });

@@ -233,7 +233,7 @@ pub(crate) fn plan_mesh<'py>(
     let report = py
         .detach(|| -> mvgrasp::Result<_> {
             let renderer = renderer(backend)?;
-            plan_grasp(&renderer, &mesh, &policy, &params)
+            Ok(plan_grasp(&renderer, &mesh, &policy, &params)?)
         })
         .map_err(pipeline_error)?;
     let file = GraspsFile::of_rendered(&report);

@@ -594,7 +594,7 @@ impl ClutterSuite {
         match planned {
             Ok(best) => Ok(best.map(|b| (b.quality, b.grasp))),
             Err(e) if e.kind() == ErrorKind::Planning => Ok(None),
-            Err(e) => Err(e),
+            Err(e) => Err(e.into()),
         }
     }
 

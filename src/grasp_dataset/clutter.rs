@@ -18,7 +18,7 @@ use mvgrasp_grasp::{GraspObject, Gripper, HandShapes};
 use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, RuntimeError};
 
 /// How the neighbours are chosen and placed.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -53,32 +53,32 @@ impl ClutterParams {
     pub fn validate(&self) -> Result<()> {
         let [lo, hi] = self.neighbours;
         if lo > hi || hi == 0 {
-            return Err(Error::ConfigValue {
+            return Err(Error::from(RuntimeError::ConfigValue {
                 key: "clutter.neighbours",
                 value: format!("{:?}", self.neighbours),
                 expected: "[min, max] with min <= max and max >= 1",
-            });
+            }));
         }
         if !(self.spread_m.is_finite() && self.spread_m > 0.0 && self.spread_m <= 1.0) {
-            return Err(Error::ConfigValue {
+            return Err(Error::from(RuntimeError::ConfigValue {
                 key: "clutter.spread_m",
                 value: format!("{}", self.spread_m),
                 expected: "in (0, 1] metres",
-            });
+            }));
         }
         if !(self.gap_m.is_finite() && self.gap_m >= 0.0) {
-            return Err(Error::ConfigValue {
+            return Err(Error::from(RuntimeError::ConfigValue {
                 key: "clutter.gap_m",
                 value: format!("{}", self.gap_m),
                 expected: "at least 0 metres",
-            });
+            }));
         }
         if self.tries == 0 {
-            return Err(Error::ConfigValue {
+            return Err(Error::from(RuntimeError::ConfigValue {
                 key: "clutter.tries",
                 value: "0".into(),
                 expected: "at least 1",
-            });
+            }));
         }
         Ok(())
     }

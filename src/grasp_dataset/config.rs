@@ -9,7 +9,7 @@ use mvgrasp_grasp::{GraspError, Gripper, LabelParams, LabelSettings, SamplingPar
 pub use mvgrasp_planner::CropParams;
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, RuntimeError};
 
 /// Everything that decides a grasp dataset's bytes. Every field has a default; a TOML file
 /// sets any of them (unknown keys are errors).
@@ -179,8 +179,8 @@ impl GraspDatasetConfig {
     /// range ([`GraspDatasetConfig::validate`]).
     pub fn from_file(path: &Path) -> Result<Self> {
         let text = std::fs::read_to_string(path).map_err(Error::io("read", path))?;
-        let config: Self =
-            toml::from_str(&text).map_err(|source| Error::Toml { source }.in_config(path))?;
+        let config: Self = toml::from_str(&text)
+            .map_err(|source| Error::from(RuntimeError::Toml { source }).in_config(path))?;
         config.validate().map_err(|e| e.in_config(path))?;
         Ok(config)
     }
@@ -195,11 +195,11 @@ impl GraspDatasetConfig {
             value: impl std::fmt::Debug,
             expected: &'static str,
         ) -> Result<()> {
-            Err(Error::ConfigValue {
+            Err(Error::from(RuntimeError::ConfigValue {
                 key,
                 value: format!("{value:?}"),
                 expected,
-            })
+            }))
         }
         self.gripper()?;
         self.intrinsics()?;
@@ -304,11 +304,11 @@ impl GraspDatasetConfig {
         Gripper::from_name_or_file(&self.gripper).map_err(|e| match e {
             GraspError::InvalidParameter {
                 value, expected, ..
-            } => Error::ConfigValue {
+            } => Error::from(RuntimeError::ConfigValue {
                 key: "gripper",
                 value,
                 expected,
-            },
+            }),
             other => other.into(),
         })
     }
@@ -346,10 +346,12 @@ impl GraspDatasetConfig {
             .into_iter()
             .find(|p| p.name() == self.intrinsics)
             .map(Intrinsics::preset)
-            .ok_or_else(|| Error::ConfigValue {
-                key: "intrinsics",
-                value: format!("{:?}", self.intrinsics),
-                expected: "one of phoxi_s, primesense, realsense_d435",
+            .ok_or_else(|| {
+                Error::from(RuntimeError::ConfigValue {
+                    key: "intrinsics",
+                    value: format!("{:?}", self.intrinsics),
+                    expected: "one of phoxi_s, primesense, realsense_d435",
+                })
             })
     }
 }
@@ -408,8 +410,8 @@ mod tests {
         std::fs::write(&path, "physics_fraction = 2.0\n").unwrap();
         let err = GraspDatasetConfig::from_file(&path).unwrap_err();
         assert!(
-            matches!(&err, Error::ConfigFile { source, .. }
-                if matches!(**source, Error::ConfigValue { key: "physics_fraction", .. })),
+            matches!(&err, Error::Runtime(RuntimeError::ConfigFile { source, .. })
+                if matches!(**source, RuntimeError::ConfigValue { key: "physics_fraction", .. })),
             "{err:?}"
         );
         assert!(

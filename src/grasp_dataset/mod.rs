@@ -50,7 +50,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::dataset::{ObjectSource, name_hash, splitmix};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, RuntimeError};
 use object::{Resolved, object_datapoints};
 use shard::{finished_shard, write_atomically, write_shard};
 
@@ -145,12 +145,13 @@ impl DatasetPlan {
         let listed: Vec<&ManifestObject> = objects.iter().map(|(o, _)| o).collect();
         // The format names the code's version of the bytes: shards written by code that
         // writes other bytes are refused too.
-        let text =
-            serde_json::to_string(&(FORMAT, config, listed)).map_err(|e| Error::ConfigValue {
+        let text = serde_json::to_string(&(FORMAT, config, listed)).map_err(|e| {
+            Error::from(RuntimeError::ConfigValue {
                 key: "config",
                 value: e.to_string(),
                 expected: "a config that serialises to JSON",
-            })?;
+            })
+        })?;
         Ok(Self {
             as_neighbour: objects.iter().map(|_| OnceLock::new()).collect(),
             objects,
@@ -354,7 +355,7 @@ fn make_shard(
         match result {
             Ok(p) if p.is_empty() => record.empty_objects.push((id, "no datapoints".into())),
             Ok(p) => points.extend(p),
-            Err(e @ Error::Render(_)) => return Err(e),
+            Err(e @ Error::Runtime(RuntimeError::Render(_))) => return Err(e),
             Err(e) => record.empty_objects.push((id, e.to_string())),
         }
     }
@@ -435,11 +436,11 @@ pub fn read_manifest(dir: &Path) -> Result<Manifest> {
         &path,
     ))?;
     if manifest.format != FORMAT {
-        return Err(Error::Format {
+        return Err(Error::from(RuntimeError::Format {
             found: manifest.format,
             expected: FORMAT,
             path,
-        });
+        }));
     }
     Ok(manifest)
 }

@@ -13,7 +13,7 @@ use safetensors::SafeTensors;
 
 use super::shard::shard_file;
 use super::{Manifest, read_manifest};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, RuntimeError};
 use crate::images::write_png8;
 
 const SCALE: usize = 3;
@@ -51,10 +51,12 @@ pub fn write_preview(dir: &Path, png: &Path, per_class: usize, columns: usize) -
     for record in &manifest.shards {
         let path = dir.join(shard_file(record.index));
         let bytes = std::fs::read(&path).map_err(Error::io("read", &path))?;
-        let fail = |source: safetensors::SafeTensorError| Error::Safetensors {
-            op: "read",
-            source,
-            path: path.clone(),
+        let fail = |source: safetensors::SafeTensorError| {
+            Error::from(RuntimeError::Safetensors {
+                op: "read",
+                source,
+                path: path.clone(),
+            })
         };
         let shard = SafeTensors::deserialize(&bytes).map_err(fail)?;
         let column = |name: &str| shard.tensor(name).map_err(fail);
@@ -119,7 +121,7 @@ pub fn write_preview(dir: &Path, png: &Path, per_class: usize, columns: usize) -
     for (row, col, t) in tiles {
         draw_tile(&mut image, width, row * tile, col * tile, size, t);
     }
-    write_png8(png, width as u32, height as u32, 3, &image)
+    Ok(write_png8(png, width as u32, height as u32, 3, &image)?)
 }
 
 fn draw_tile(image: &mut [u8], width: usize, top: usize, left: usize, size: usize, t: &Tile) {

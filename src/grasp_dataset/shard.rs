@@ -31,7 +31,7 @@ use safetensors::Dtype;
 use safetensors::tensor::TensorView;
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, RuntimeError};
 
 /// One labelled grasp image.
 #[derive(Clone, Debug, PartialEq)]
@@ -354,18 +354,22 @@ pub fn write_shard(
         .map(|(name, dtype, shape, data)| {
             TensorView::new(*dtype, shape.clone(), data)
                 .map(|view| (*name, view))
-                .map_err(|source| Error::Safetensors {
-                    op: "write",
-                    source,
-                    path: shard_path.clone(),
+                .map_err(|source| {
+                    Error::from(RuntimeError::Safetensors {
+                        op: "write",
+                        source,
+                        path: shard_path.clone(),
+                    })
                 })
         })
         .collect::<Result<Vec<_>>>()?;
     // No metadata map: safetensors stores it from a HashMap, whose order would vary the bytes.
-    let bytes = safetensors::serialize(views, None).map_err(|source| Error::Safetensors {
-        op: "write",
-        source,
-        path: shard_path.clone(),
+    let bytes = safetensors::serialize(views, None).map_err(|source| {
+        Error::from(RuntimeError::Safetensors {
+            op: "write",
+            source,
+            path: shard_path.clone(),
+        })
     })?;
     record.sha256 = sha256_hex(&bytes);
     let sidecar = sidecar_path(dir, record.index);

@@ -1,5 +1,6 @@
 //! The pipeline's error: whichever layer failed, with its message intact, or what went wrong in
-//! the root's own work (configs, datasets, files), with the values and the file named.
+//! its own work (configs, files, options, depth from RGB), with the values and the file named.
+//! The dataset generators and the evaluation above it add their own (`mvgrasp::Error`).
 
 use std::path::PathBuf;
 
@@ -120,67 +121,6 @@ pub enum Error {
         /// What is wrong.
         problem: String,
     },
-    /// An evaluation that cannot go on: its object set, its record folder or its options.
-    #[error("evaluate: {problem}")]
-    Evaluate {
-        /// What is wrong (naming the file or option).
-        problem: String,
-    },
-    /// A dataset asked of no objects.
-    #[error("dataset: no objects to make a dataset of")]
-    NoObjects,
-    /// Two objects of a dataset with one name.
-    #[error("dataset: two objects are named {name:?}; rename one file or list each file once")]
-    DuplicateObject {
-        /// The name.
-        name: String,
-    },
-    /// A shard index past the dataset.
-    #[error("dataset: shard {index} does not exist: the dataset has {num_shards}")]
-    NoSuchShard {
-        /// The index asked for.
-        index: usize,
-        /// Shards the dataset has.
-        num_shards: usize,
-    },
-    /// A folder that holds a dataset made with another config or other objects.
-    #[error("{path}: this folder holds a dataset made {reason}; use another folder or delete it")]
-    ForeignDataset {
-        /// The dataset's manifest (or settings file).
-        path: PathBuf,
-        /// How it differs: "with another config", "by another version of mvgrasp (...)".
-        reason: String,
-    },
-    /// A finished shard made with another config or other objects.
-    #[error(
-        "{path}: shard {index} was made with another config or other objects (plan hash \
-         {found:?}, this one {expected:?}); use another folder or delete it"
-    )]
-    ForeignShard {
-        /// The shard.
-        index: usize,
-        /// The hash it records (empty: made before hashes were recorded).
-        found: String,
-        /// This plan's hash.
-        expected: String,
-        /// The shard's file.
-        path: PathBuf,
-    },
-    /// A shard file that cannot be read as one of the grasp dataset's (see
-    /// `mvgrasp::grasp_dataset::read_shard`).
-    #[error("{path}: not a readable grasp-dataset shard: {problem}")]
-    Shard {
-        /// What is wrong: the file unreadable, a column missing or of another type or shape.
-        problem: String,
-        /// The file.
-        path: PathBuf,
-    },
-    /// A dataset with nothing to show.
-    #[error("{path}: the dataset has no datapoint to preview")]
-    EmptyDataset {
-        /// The dataset folder.
-        path: PathBuf,
-    },
 }
 
 /// The domain an [`Error`] belongs to: what went wrong, in the terms of the Python binding's
@@ -220,16 +160,8 @@ impl Error {
             | Self::ConfigValue { .. }
             | Self::Json { .. }
             | Self::Safetensors { .. }
-            | Self::Shard { .. }
             | Self::Format { .. }
-            | Self::NoObjects
-            | Self::DuplicateObject { .. }
-            | Self::NoSuchShard { .. }
-            | Self::ForeignDataset { .. }
-            | Self::ForeignShard { .. }
-            | Self::EmptyDataset { .. }
-            | Self::Photo { .. }
-            | Self::Evaluate { .. } => ErrorKind::Dataset,
+            | Self::Photo { .. } => ErrorKind::Dataset,
         }
     }
 
