@@ -151,10 +151,6 @@ struct Args {
     /// choosing how candidates are ranked, on the development set.
     #[arg(long)]
     dump_rescored: Option<PathBuf>,
-    /// With --dump-rescored: also try each candidate on the object as the fused views
-    /// reconstruct it ([`mvgrasp::planner::Fusion::solid_mesh`]).
-    #[arg(long)]
-    dump_recon: bool,
     /// The fused policies rank their re-scored candidates by the re-score alone, without the
     /// shipped ranker (`models/ranker_fused.json`).
     #[arg(long)]
@@ -531,15 +527,7 @@ fn run(args: &Args) -> CliResult<()> {
                 String::new()
             };
             if let (Some(out), Some(object)) = (dump.as_mut(), &object) {
-                let renderer = args.dump_recon.then_some(&renderer);
-                dump_rescored(
-                    out,
-                    [name, label],
-                    object,
-                    &report,
-                    (gripper, params),
-                    renderer,
-                )?;
+                dump_rescored(out, [name, label], object, &report, (gripper, params))?;
             }
             // The approach's angle from straight down.
             let tilt_deg = tilt_rad(&best.grasp).to_degrees();
@@ -660,7 +648,6 @@ fn dump_rescored(
     object: &GraspObject,
     report: &mvgrasp::planner::PlanReport,
     (gripper, params): (&mvgrasp::grasp::Gripper, &PlanParams),
-    renderer: Option<&Renderer>,
 ) -> CliResult<()> {
     let rescored: Vec<_> = report
         .candidates
@@ -671,12 +658,6 @@ fn dump_rescored(
     if rescored.is_empty() {
         return Ok(());
     }
-    // With a renderer: the same trial on the object as the fused views reconstruct it (what
-    // the planner could try itself).
-    let recon_trials = match renderer {
-        Some(renderer) => reconstruction_trials(renderer, object, &rescored, gripper, params)?,
-        None => vec![None; rescored.len()],
-    };
     let labels = check_grasps(
         object,
         &report.table_from_object,
@@ -684,7 +665,7 @@ fn dump_rescored(
         gripper,
         params,
     )?;
-    for (rank, ((c, l), r)) in rescored.iter().zip(&labels).zip(&recon_trials).enumerate() {
+    for (rank, (c, l)) in rescored.iter().zip(&labels).enumerate() {
         let tilt_deg = tilt_rad(&c.grasp).to_degrees();
         let line = serde_json::json!({
             "object": name,
@@ -703,47 +684,9 @@ fn dump_rescored(
             "robust": l.robust,
             "held": l.physics.map(|p| p.success),
             "failed_at": l.physics.and_then(|p| p.failed_at).map(|f| format!("{f:?}")),
-            "recon_held": r.map(|p| p.success),
-            "recon_failed_at": r.and_then(|p| p.failed_at).map(|f| format!("{f:?}")),
         });
         writeln!(out, "{line}")?;
     }
     // Flushed here, so that a failed write is an error rather than lost when the writer drops.
     Ok(out.flush()?)
-}
-
-/// Each of `candidates` tried in physics on `object` as its fused views reconstruct it (`None`
-/// where no reconstruction could be made or the trial failed to run).
-fn reconstruction_trials(
-    renderer: &Renderer,
-    object: &GraspObject,
-    candidates: &[mvgrasp::planner::ScoredGrasp],
-    gripper: &mvgrasp::grasp::Gripper,
-    params: &PlanParams,
-) -> CliResult<Vec<Option<mvgrasp::grasp::physics::PhysicsOutcome>>> {
-    use mvgrasp::grasp::physics::{PhysicsObject, simulate_grasp};
-    use rayon::prelude::*;
-    let scene = mvgrasp::planner::render_scene(renderer, object, params)?;
-    let body = params
-        .fusion
-        .as_ref()
-        .and_then(|f| mvgrasp::planner::Fusion::build(&scene.views, f))
-        .and_then(|f| f.solid_mesh())
-        .and_then(|m| GraspObject::new(m).ok())
-        .and_then(|o| PhysicsObject::from_grasp_object(&o, &params.labels.physics_shape).ok());
-    Ok(candidates
-        .par_iter()
-        .map(|c| {
-            body.as_ref().and_then(|body| {
-                simulate_grasp(
-                    body,
-                    &mvgrasp::geometry::Pose3::IDENTITY,
-                    &c.grasp,
-                    gripper,
-                    &params.labels.physics,
-                )
-                .ok()
-            })
-        })
-        .collect())
 }

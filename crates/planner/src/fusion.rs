@@ -271,11 +271,6 @@ impl Fusion {
         self.origin
     }
 
-    /// What the views say about cell `index` (in the grid's order, see [`Fusion::origin`]).
-    pub(crate) fn cell(&self, index: usize) -> Occupancy {
-        self.cells[index]
-    }
-
     /// Whether the hand check lets the hand into unknown space ([`FusionParams::allow_unknown`]).
     pub fn allows_unknown(&self) -> bool {
         self.allow_unknown

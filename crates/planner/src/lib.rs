@@ -14,7 +14,6 @@ pub mod plan;
 pub mod policy;
 pub mod probability;
 pub mod ranker;
-pub mod reconstruct;
 pub mod sampler;
 pub mod scored;
 pub mod seed;
