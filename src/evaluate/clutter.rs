@@ -18,9 +18,10 @@
 //! views add cameras 50 degrees up around the scene, 0.7 m away, fused by the multi-view
 //! planner (`plan --views-dir`). With a depth-from-RGB method (`--clutter-depth-from`) each
 //! view's depth is predicted from colour views instead, as `plan --rgb` predicts it: the
-//! objects (and the bin's walls) in random colours on the grey table, the method given the
-//! foreground (what is not the table, as a picker that knows its empty table tells apart)
-//! as its masks, the planner still none; depth from RGB needs 2 views or more. The grasp is
+//! objects in random colours on the grey table (in a plain blue bin), the method given the
+//! foreground (what is not the table, as a picker that knows its empty workspace tells apart)
+//! as its masks, the planner still none; the bin's walls keep their known depth (a fixture,
+//! like the table). Depth from RGB needs 2 views or more. The grasp is
 //! tried in rapier among the others ([`mvgrasp_grasp::physics::simulate_grasp_among`]) on
 //! the object nearest its centre; it must come out alone. A held object is taken away and the rest settle (and what leaves the
 //! workspace goes, uncleared), as VGN's simulator does; after a failure the scene is as it
@@ -53,9 +54,12 @@ use crate::error::{Error, ErrorKind, Result};
 use crate::grasp_dataset::clutter::{ClutterParams, Neighbour, place};
 use crate::planner::{
     DepthFrom, DepthImage, DepthPredictor, GqcnnPolicy, Mask, PlanOptions, Planner, RgbInput,
-    SensorPlanParams, View, models, plan_on_view, plan_on_views, render_rgb,
+    SensorPlanParams, View, models, plan_on_view, plan_on_views,
 };
-use crate::scene::render_depths;
+use crate::scene::{OBJECT_ID, SceneData, TABLE_HALF_SIDE_M, render_depths, render_frames};
+use crate::stereo::RgbView;
+use mvgrasp_planner::seed::splitmix;
+use mvgrasp_render::{Colors, Lighting, MeshInput, random_colors};
 
 /// The scenes the suite knows.
 pub const SCENES: [&str; 3] = ["packed", "pile", "bin"];
@@ -277,6 +281,8 @@ pub struct ClutterSuite {
     /// The bin's walls: each one's mesh where it stands, its trial shape (centred) and where
     /// that stands.
     walls: Vec<(TriangleMesh, PhysicsObject, Pose3)>,
+    /// The walls' meshes where they stand, as one mesh.
+    bin: TriangleMesh,
 }
 
 impl ClutterSuite {
@@ -322,9 +328,12 @@ impl ClutterSuite {
                 let pose = Pose3::from_translation(centre);
                 Ok((mesh.transformed(&pose), physics, pose))
             })
-            .collect::<Result<_>>()?;
+            .collect::<Result<Vec<_>>>()?;
+        let wall_meshes: Vec<TriangleMesh> = walls.iter().map(|(mesh, ..)| mesh.clone()).collect();
+        let bin = TriangleMesh::concatenate(&wall_meshes, wall_meshes[0].origin())?;
         Ok(Self {
             walls,
+            bin,
             pool: objects
                 .iter()
                 .map(|o| {
@@ -525,28 +534,18 @@ impl ClutterSuite {
             .iter()
             .map(|o| o.shape.mesh().transformed(&o.pose))
             .collect();
-        if walls {
-            parts.extend(self.walls.iter().map(|(mesh, ..)| mesh.clone()));
-        }
-        let merged = TriangleMesh::concatenate(&parts, parts[0].origin())?;
         let depths = match &self.rgb {
-            None => render_depths(renderer, &merged, &Pose3::IDENTITY, cameras)?,
+            None => {
+                if walls {
+                    parts.push(self.bin.clone());
+                }
+                let merged = TriangleMesh::concatenate(&parts, parts[0].origin())?;
+                render_depths(renderer, &merged, &Pose3::IDENTITY, cameras)?
+            }
             Some(rgb) => {
-                let colours = ((round as u64) << 32) ^ seed;
-                // The foreground (objects and walls: what is not the table) is the method's
-                // masks, as a picker that knows its empty table tells them apart; the planner
-                // gets none, as on rendered depth.
-                let views: Vec<_> =
-                    render_rgb(renderer, &merged, &Pose3::IDENTITY, cameras, rgb, colours)?
-                        .into_iter()
-                        .map(|(view, _)| view)
-                        .collect();
-                let predicted = checked(&rgb.depth, &views)?;
-                cameras
-                    .iter()
-                    .zip(predicted)
-                    .map(|(camera, p)| DepthImage::new(camera.intrinsics, p.depth_m))
-                    .collect::<mvgrasp_planner::Result<_>>()?
+                let objects = TriangleMesh::concatenate(&parts, parts[0].origin())?;
+                let colours = splitmix(((round as u64) << 32) ^ seed);
+                self.predicted_depths(renderer, rgb, &objects, walls, cameras, colours)?
             }
         };
         let inside = ClutterScene::Bin.pile_params().box_half_side_m - BIN_MARGIN_M;
@@ -596,6 +595,73 @@ impl ClutterSuite {
             Err(e) if e.kind() == ErrorKind::Planning => Ok(None),
             Err(e) => Err(e.into()),
         }
+    }
+
+    /// Depth predicted by `rgb`'s method from colour views of `objects` (random colours per
+    /// vertex seeded by `seed`) on the grey table, in the bin with its walls. The method's
+    /// masks are the foreground, objects and walls (what is not the table, as a picker that
+    /// knows its empty workspace tells apart), so that a wall hiding an object does not carve
+    /// it away; the walls' own pixels then take their known depth (the bin is a fixture whose
+    /// place the picker knows, as the table's), the objects' the method's.
+    fn predicted_depths(
+        &self,
+        renderer: &Renderer,
+        rgb: &RgbInput,
+        objects: &TriangleMesh,
+        walls: bool,
+        cameras: &[Camera],
+        seed: u64,
+    ) -> Result<Vec<DepthImage>> {
+        let colours = random_colors(seed, objects.vertices().len());
+        let data = SceneData::of_mesh(objects, &Pose3::IDENTITY, TABLE_HALF_SIDE_M);
+        let mut inputs = data.mesh_inputs(objects.triangles(), Colors::PerVertex(&colours), true);
+        let bin = SceneData::of_mesh(&self.bin, &Pose3::IDENTITY, 0.0);
+        if walls {
+            let wall = bin.mesh_inputs(self.bin.triangles(), Colors::Uniform(WALL_RGB), false);
+            inputs.extend(wall.into_iter().map(|w| MeshInput {
+                instance_id: WALL_ID,
+                ..w
+            }));
+        }
+        let frames = render_frames(renderer, &inputs, cameras, &Lighting::Headlight)?;
+        let views: Vec<RgbView> = cameras
+            .iter()
+            .zip(&frames)
+            .map(|(camera, frame)| RgbView {
+                camera: *camera,
+                rgb: frame
+                    .rgb
+                    .chunks_exact(3)
+                    .map(|p| [p[0], p[1], p[2]])
+                    .collect(),
+                mask: Some(
+                    frame
+                        .mask
+                        .iter()
+                        .map(|&m| m == OBJECT_ID || m == WALL_ID)
+                        .collect(),
+                ),
+            })
+            .collect();
+        let predicted = checked(&rgb.depth, &views)?;
+        let depths = cameras
+            .iter()
+            .zip(frames)
+            .zip(predicted)
+            .map(|((camera, frame), p)| {
+                let depth = p
+                    .depth_m
+                    .iter()
+                    .zip(&frame.mask)
+                    .zip(&frame.depth_m)
+                    .map(
+                        |((&predicted, &id), &known)| if id == WALL_ID { known } else { predicted },
+                    )
+                    .collect();
+                DepthImage::new(camera.intrinsics, depth)
+            })
+            .collect::<mvgrasp_planner::Result<_>>()?;
+        Ok(depths)
     }
 
     /// `drawn` packed on the table: the first at the origin in its most probable resting pose,
@@ -674,6 +740,12 @@ fn on_table(object: &Drawn, pose: Pose3) -> OnTable {
 
 /// How far inside the bin's walls its workspace mask ends, metres.
 const BIN_MARGIN_M: f32 = 0.01;
+
+/// The bin's mask id in the colour views (the scene's object and table are 1 and 2).
+const WALL_ID: u8 = 3;
+
+/// The bin's colour: a plain blue tote.
+const WALL_RGB: [u8; 3] = [70, 100, 150];
 
 /// The pixels of `depth` that see something standing over the bin's floor (within `inside`
 /// of its centre, 3 mm or more above it); `None` when there is none.
