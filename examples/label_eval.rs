@@ -32,13 +32,13 @@ use std::time::Instant;
 
 use clap::Parser;
 use mvgrasp::cli::CliResult;
+use mvgrasp::evaluate::labels::{Confusion, LabelRecord, LabelSuite};
 use mvgrasp::geometry::objects::{Category, generate};
 use mvgrasp::geometry::{TriangleMesh, load_mesh};
+use mvgrasp::grasp::Gripper;
 use mvgrasp::grasp::physics::{
-    PhysicsNoise, PhysicsObject, PhysicsOutcome, PhysicsParams, StageCounts, success_probability,
+    PhysicsNoise, PhysicsObject, PhysicsOutcome, PhysicsParams, StageCounts,
 };
-use mvgrasp::grasp::quality::{RobustQualityParams, grasp_seed};
-use mvgrasp::grasp::{AnalysisConfig, Gripper, SamplingParams};
 use serde::Serialize;
 
 /// Compare the robust label and the physics label with a high-K physics outcome.
@@ -177,47 +177,23 @@ fn write_replay_meshes(
     Ok((mesh_name, parts_name))
 }
 
-/// One grasp's labels and outcome.
-#[derive(Serialize)]
-struct Labelled {
-    object: String,
-    group: String,
-    robust_epsilon: f64,
-    robust: bool,
-    /// Of the label's trials that got past settling, the share that held.
-    physics_rate: Option<f64>,
-    /// The same of the outcome's trials.
-    outcome_rate: Option<f64>,
-    /// The outcome's failed trials by stage.
-    outcome_failures: StageCounts,
-}
-
-/// A confusion table: [label +, held], [label +, failed], [label -, held], [label -, failed].
-#[derive(Default, Clone, Copy)]
-struct Confusion([usize; 4]);
-
-impl Confusion {
-    fn add(&mut self, label: bool, held: bool) {
-        self.0[usize::from(!label) * 2 + usize::from(!held)] += 1;
-    }
-
-    fn row(&self, name: &str, label: &str) -> String {
-        let [tp, fp, fn_, tn] = self.0;
-        let pct = |a: usize, b: usize| {
-            if b == 0 {
-                "-".to_string()
-            } else {
-                format!("{:.0}%", 100.0 * a as f64 / b as f64)
-            }
-        };
-        format!(
-            "| {name} | {label} | {} | {tp} | {fp} | {fn_} | {tn} | {} | {} | {} |",
-            tp + fp + fn_ + tn,
-            pct(tp + tn, tp + fp + fn_ + tn),
-            pct(fp, fp + tn),
-            pct(fp, tp + fp),
-        )
-    }
+/// A confusion table as a row of the printed table.
+fn row(table: &Confusion, name: &str, label: &str) -> String {
+    let [tp, fp, fn_, tn] = table.0;
+    let pct = |a: usize, b: usize| {
+        if b == 0 {
+            "-".to_string()
+        } else {
+            format!("{:.0}%", 100.0 * a as f64 / b as f64)
+        }
+    };
+    format!(
+        "| {name} | {label} | {} | {tp} | {fp} | {fn_} | {tn} | {} | {} | {} |",
+        tp + fp + fn_ + tn,
+        pct(tp + tn, tp + fp + fn_ + tn),
+        pct(fp, fp + tn),
+        pct(fp, tp + fp),
+    )
 }
 
 fn main() -> ExitCode {
@@ -240,21 +216,14 @@ fn run(args: &Args) -> CliResult<()> {
             objects.push(("real".into(), name, mesh));
         }
     }
-    let quality = RobustQualityParams::default();
-    let noise = PhysicsNoise::matching(&quality);
-    let params = PhysicsParams::default();
-    let config = AnalysisConfig {
-        sampling: SamplingParams {
-            target_grasps: args.n,
-            max_tries: 100 * args.n,
-            ..Default::default()
-        },
-        quality,
-        physics: Some(params.clone()),
-        physics_trials: args.k,
-        physics_noise: noise,
-        ..AnalysisConfig::default()
+    let suite = LabelSuite {
+        grasps: args.n,
+        trials: args.k,
+        outcome_trials: args.outcome_k,
     };
+    let config = suite.analysis_config();
+    let params = config.physics.clone().unwrap_or_default();
+    let noise = config.physics_noise;
     let gripper = Gripper::default();
     let started = Instant::now();
     let mut all = Vec::new();
@@ -301,18 +270,8 @@ fn run(args: &Args) -> CliResult<()> {
             let label = g
                 .physics_success
                 .ok_or("the analysis ran no perturbed trials")?;
-            let outcome = success_probability(
-                &body,
-                &table_from_object,
-                &g.grasp,
-                &gripper,
-                &params,
-                &noise,
-                args.outcome_k,
-                // Independent of the label's trials (`analyse` seeds those from
-                // grasp_seed(seed, 2)).
-                grasp_seed(grasp_seed(args.eval.seed, 3), i),
-            )?;
+            let outcome =
+                suite.outcome((&body, &table_from_object), (&g.grasp, i), args.eval.seed)?;
             if args.replay.is_some() {
                 replay.grasps.push(ReplayGrasp {
                     object: replay.objects.len() - 1,
@@ -326,7 +285,8 @@ fn run(args: &Args) -> CliResult<()> {
                     outcome_rate: outcome.settled_rate(),
                 });
             }
-            all.push(Labelled {
+            all.push(LabelRecord {
+                set: "label_eval".into(),
                 object: name.clone(),
                 group: group.clone(),
                 robust_epsilon: g.quality.robust_epsilon,
@@ -358,20 +318,10 @@ fn run(args: &Args) -> CliResult<()> {
     );
     println!("|---|---|---|---|---|---|---|---|---|---|");
     for group in &groups {
-        let mut tables = [Confusion::default(); 3];
-        for g in all.iter().filter(|g| group == "all" || &g.group == group) {
-            // A grasp whose trials all lost the resting pose is not judged.
-            let (Some(outcome), Some(physics)) = (g.outcome_rate, g.physics_rate) else {
-                continue;
-            };
-            let held = outcome >= 0.5;
-            let physics = physics >= 0.5;
-            tables[0].add(g.robust, held);
-            tables[1].add(physics, held);
-            tables[2].add(g.robust && physics, held);
-        }
+        // A grasp whose trials all lost the resting pose is not judged.
+        let tables = Confusion::of(all.iter().filter(|g| group == "all" || &g.group == group));
         for (table, label) in tables.iter().zip(["robust", "physics", "both"]) {
-            println!("{}", table.row(group, label));
+            println!("{}", row(table, group, label));
         }
     }
     let mut failures = StageCounts::default();

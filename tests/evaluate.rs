@@ -15,7 +15,8 @@ impl Progress for Quiet {
 
 /// Two small built-in objects as mesh files in `dir/meshes`, and a config that plans on them
 /// with the depth planner, two seeds and the exhaustive search, predicts their depth from
-/// 1 and 2 views, and clears a packed, a pile and a bin scene of two of them from one Primesense view 0.6 m away.
+/// 1 and 2 views, clears a packed, a pile and a bin scene of two of them from one Primesense
+/// view 0.6 m away, and judges 3 grasps' labels on each.
 fn two_objects(dir: &Path) -> EvalConfig {
     let meshes = dir.join("meshes");
     std::fs::create_dir_all(&meshes).unwrap();
@@ -32,7 +33,12 @@ fn two_objects(dir: &Path) -> EvalConfig {
         seeds: vec![0, 1],
         all_poses: false,
         coverage: true,
-        suites: vec!["grasps".into(), "depth".into(), "clutter".into()],
+        suites: vec![
+            "grasps".into(),
+            "depth".into(),
+            "clutter".into(),
+            "labels".into(),
+        ],
         depth_views: vec![1, 2],
         depth_distance_m: 0.5,
         clutter_scenes: vec!["packed".into(), "pile".into(), "bin".into()],
@@ -43,6 +49,9 @@ fn two_objects(dir: &Path) -> EvalConfig {
         clutter_distance_m: 0.6,
         clutter_training_depths: true,
         clutter_depth_from: None,
+        label_grasps: 3,
+        label_trials: 3,
+        label_outcome_trials: 4,
     }
 }
 
@@ -94,9 +103,11 @@ fn a_run_interrupted_and_resumed_writes_the_same_bytes_as_one_that_was_not() {
     let lines: Vec<&str> = records.lines().collect();
     assert_eq!(
         lines.len(),
-        2 * (1 + 2 + 1) + 3,
-        "per object: its poses, a grasp per seed, its depth; a round per clutter scene"
+        2 * (1 + 2 + 1 + 1) + 3,
+        "per object: its poses, a grasp per seed, its depth, its labels; a round per clutter scene"
     );
+    assert!(!results.labels.is_empty());
+    assert!(report.contains("## Labels"), "{report}");
     assert_eq!(results.clutter.len(), 3, "{:?}", results.skipped);
     assert!(
         results.clutter.iter().all(|r| !r.attempts.is_empty()),
@@ -104,9 +115,9 @@ fn a_run_interrupted_and_resumed_writes_the_same_bytes_as_one_that_was_not() {
         results.clutter
     );
     assert!(report.contains("## Clutter"), "{report}");
-    let mut kept = lines[..5].join("\n");
+    let mut kept = lines[..6].join("\n");
     kept.push('\n');
-    kept.push_str(&lines[5][..lines[5].len() / 2]);
+    kept.push_str(&lines[6][..lines[6].len() / 2]);
     std::fs::write(resumed.join("records.jsonl"), kept).unwrap();
     evaluate(&config, &resumed, &mut Quiet).unwrap();
     for ((name, a), (_, b)) in files(&whole).iter().zip(files(&resumed)) {
@@ -163,6 +174,11 @@ fn a_folder_of_another_runs_settings_and_an_unknown_policy_are_refused_by_name()
             "--clutter-objects",
             "0",
             "clutter objects 0: a round needs at least one",
+        ),
+        (
+            "--label-outcome-trials",
+            "0",
+            "labels: grasps, trials and outcome trials must each be at least 1",
         ),
         (
             "--clutter-depth-from",

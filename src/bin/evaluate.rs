@@ -31,8 +31,9 @@ struct Args {
     out: PathBuf,
     /// The full evaluation: 5 held-out built-in objects per category and every real mesh,
     /// every resting pose of at least 5%, seeds 0, 1 and 2, the exhaustive search for
-    /// coverage, the policies rgb, depth, rgb-fused and depth-fused, and 50 clutter rounds of
-    /// each scene from 1 and 5 views (hours on 2 cores).
+    /// coverage, the policies rgb, depth, rgb-fused and depth-fused, 50 clutter rounds of
+    /// each scene from 1 and 5 views, and 20 grasps' labels per object judged by 50 trials
+    /// (hours on 2 cores).
     /// Options given beside it override its choices.
     #[arg(long)]
     full: bool,
@@ -69,7 +70,8 @@ struct Args {
     coverage: bool,
     /// A suite (repeat): grasps (plans checked in the trial), depth (depth from RGB against
     /// the rendered depth), clutter (VGN and GIGA's clutter-removal rounds, packed, pile and
-    /// bin, drawn from the object sets). Default: all three.
+    /// bin, drawn from the object sets), labels (the robust and physics labels of sampled
+    /// grasps against an outcome of more trials). Default: all four.
     #[arg(long = "suite")]
     suites: Vec<String>,
     /// The depth suite's numbers of input views (default: 1,3,5,9).
@@ -108,6 +110,15 @@ struct Args {
     /// --clutter-views at least 2.
     #[arg(long)]
     clutter_depth_from: Option<String>,
+    /// The labels suite's grasps sampled per object (default 10; --full: 20).
+    #[arg(long)]
+    label_grasps: Option<usize>,
+    /// Its perturbed trials of the physics label (default 10).
+    #[arg(long)]
+    label_trials: Option<usize>,
+    /// Its perturbed trials of the outcome the labels are judged by (default 20; --full: 50).
+    #[arg(long)]
+    label_outcome_trials: Option<usize>,
     /// Plain progress lines even on a terminal.
     #[arg(long)]
     plain: bool,
@@ -140,6 +151,8 @@ fn config_of(args: &Args) -> EvalConfig {
             .to_vec();
         config.clutter_views = vec![1, 5];
         config.clutter_rounds = 50;
+        config.label_grasps = 20;
+        config.label_outcome_trials = 50;
     }
     if !args.sets.is_empty() {
         config.sets.clone_from(&args.sets);
@@ -183,6 +196,15 @@ fn config_of(args: &Args) -> EvalConfig {
     if let Some(d) = args.clutter_distance_m {
         config.clutter_distance_m = d;
     }
+    if let Some(n) = args.label_grasps {
+        config.label_grasps = n;
+    }
+    if let Some(n) = args.label_trials {
+        config.label_trials = n;
+    }
+    if let Some(n) = args.label_outcome_trials {
+        config.label_outcome_trials = n;
+    }
     if let Some(from) = &args.clutter_depth_from {
         config.clutter_depth_from = Some(from.clone());
     }
@@ -217,11 +239,13 @@ fn run(args: &Args) -> CliResult<()> {
         eprintln!("not evaluated: {object}: {why}");
     }
     println!(
-        "{} plans on {} objects and poses, {} depth records, {} clutter rounds: {}",
+        "{} plans on {} objects and poses, {} depth records, {} clutter rounds, {} labelled \
+         grasps: {}",
         results.grasps.len(),
         results.objects.len(),
         results.depth.len(),
         results.clutter.len(),
+        results.labels.len(),
         args.out.join("report.md").display()
     );
     Ok(())

@@ -8,11 +8,17 @@
 //! offered resting pose and seed, and the project's trial tries it; a missing grasp counts as
 //! a failure. With `coverage`, an exhaustive search on the true mesh says which objects some
 //! grasp in reach can hold.
+//!
+//! The depth suite ([`depth`]) scores depth from RGB against the rendered depth (the seed
+//! paper's Table 1); the clutter suite ([`clutter`]) runs VGN and GIGA's clutter-removal
+//! rounds; the labels suite ([`labels`]) judges the labels the networks learn by an outcome of
+//! more trials.
 
 pub mod clutter;
 pub mod depth;
 pub mod grasps;
 pub mod journal;
+pub mod labels;
 pub mod objects;
 pub mod report;
 
@@ -86,6 +92,23 @@ pub struct EvalConfig {
     /// the planner still none; every number of views at least 2. `None`: rendered depth.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub clutter_depth_from: Option<String>,
+    /// The labels suite's grasps sampled per object.
+    #[serde(default = "ten")]
+    pub label_grasps: usize,
+    /// Its perturbed trials of the physics label.
+    #[serde(default = "ten")]
+    pub label_trials: usize,
+    /// Its perturbed trials of the outcome the labels are judged by.
+    #[serde(default = "twenty")]
+    pub label_outcome_trials: usize,
+}
+
+fn ten() -> usize {
+    10
+}
+
+fn twenty() -> usize {
+    20
 }
 
 fn clutter_camera() -> String {
@@ -127,7 +150,7 @@ fn paper_distance_m() -> f32 {
 }
 
 /// The suites [`evaluate`] knows.
-pub const SUITES: [&str; 3] = ["grasps", "depth", "clutter"];
+pub const SUITES: [&str; 4] = ["grasps", "depth", "clutter", "labels"];
 
 impl EvalConfig {
     /// The small default: 1 held-out built-in object per category and the first 6 real meshes,
@@ -153,6 +176,9 @@ impl EvalConfig {
             clutter_distance_m: clutter_distance_m(),
             clutter_training_depths: false,
             clutter_depth_from: None,
+            label_grasps: ten(),
+            label_trials: ten(),
+            label_outcome_trials: twenty(),
         }
     }
 }
@@ -188,6 +214,9 @@ pub struct Results {
     /// The clutter suite's rounds.
     #[serde(default)]
     pub clutter: Vec<clutter::RoundRecord>,
+    /// The labels suite's grasps.
+    #[serde(default)]
+    pub labels: Vec<labels::LabelRecord>,
     /// Objects (or clutter rounds) that could not be evaluated, and why.
     pub skipped: Vec<(String, String)>,
 }
@@ -229,6 +258,17 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
     if config.clutter_objects == 0 {
         return Err(invalid(
             "clutter objects 0: a round needs at least one".into(),
+        ));
+    }
+    if [
+        config.label_grasps,
+        config.label_trials,
+        config.label_outcome_trials,
+    ]
+    .contains(&0)
+    {
+        return Err(invalid(
+            "labels: grasps, trials and outcome trials must each be at least 1".into(),
         ));
     }
     if let Some(n) = config.depth_views.iter().find(|n| !(1..=10).contains(*n)) {
@@ -307,6 +347,7 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
         grasps: Vec::new(),
         depth: Vec::new(),
         clutter: Vec::new(),
+        labels: Vec::new(),
         skipped: Vec::new(),
     };
     let depth_suite = if config.suites.iter().any(|s| s == "depth") {
@@ -327,7 +368,16 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
     } else {
         Vec::new()
     };
-    let per_object = run_grasps || depth_suite.is_some();
+    let label_suite = config
+        .suites
+        .iter()
+        .any(|s| s == "labels")
+        .then_some(labels::LabelSuite {
+            grasps: config.label_grasps,
+            trials: config.label_trials,
+            outcome_trials: config.label_outcome_trials,
+        });
+    let per_object = run_grasps || depth_suite.is_some() || label_suite.is_some();
     let total = if per_object { objects.len() } else { 0 } + rounds.len();
     for (done, object) in objects.iter().enumerate().filter(|_| per_object) {
         let id = format!("{}|{}", object.set, object.name);
@@ -362,6 +412,21 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
                     }
                 };
                 results.depth.extend(records);
+            }
+            if let Some(suite) = &label_suite {
+                let key = format!("labels|{id}");
+                let records: Vec<labels::LabelRecord> = match journal.get(&key)? {
+                    Some(records) => records,
+                    None => {
+                        let records = suite.run(
+                            (&object.set, &object.name, &object.group),
+                            object.load()?,
+                            config.seeds[0],
+                        )?;
+                        journal.put(&key, &records)?
+                    }
+                };
+                results.labels.extend(records);
             }
             Ok(())
         };

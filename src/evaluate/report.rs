@@ -165,6 +165,9 @@ pub fn markdown(results: &Results) -> String {
     if !results.clutter.is_empty() {
         clutter_table(&mut md, results);
     }
+    if !results.labels.is_empty() {
+        labels_table(&mut md, results);
+    }
     if results.grasps.is_empty() {
         return md;
     }
@@ -617,6 +620,65 @@ fn clutter_table(md: &mut String, results: &Results) {
         );
     }
     md.push('\n');
+}
+
+/// The labels suite's confusion tables: per object group and over all, each label against the
+/// outcome.
+fn labels_table(md: &mut String, results: &Results) {
+    use super::labels::Confusion;
+    let config = &results.config;
+    let records = &results.labels;
+    let objects = records
+        .iter()
+        .map(|r| (&r.set, &r.object))
+        .collect::<std::collections::BTreeSet<_>>()
+        .len();
+    let _ = writeln!(
+        md,
+        "## Labels
+
+The labels the networks learn against the trial's outcome: {} antipodal          grasps sampled on each of {objects} objects in its most probable resting pose (objects          that only roll left out), each labelled by Dex-Net 2.0's robust Ferrari-Canny label,          by the physics label (at least half of {} perturbed trials hold) and by both, and          judged by an outcome of {} other perturbed trials (held when at least half hold;          trials whose object left its pose before the hand came are left out of both).          False-positive rate: label positive of the outcomes that failed.
+",
+        config.label_grasps, config.label_trials, config.label_outcome_trials
+    );
+    let _ = writeln!(
+        md,
+        "| objects | label | grasps | + held | + failed | - held | - failed | agreement | false-positive rate | positives that failed |\n|---|---|---|---|---|---|---|---|---|---|"
+    );
+    let mut groups: Vec<&str> = records.iter().map(|r| r.group.as_str()).collect();
+    groups.sort_unstable();
+    groups.dedup();
+    groups.push("all");
+    for group in groups {
+        let tables = Confusion::of(
+            records
+                .iter()
+                .filter(|r| group == "all" || r.group == group),
+        );
+        for (Confusion([tp, fp, fn_, tn]), label) in
+            tables.iter().zip(["robust", "physics", "both"])
+        {
+            let n = tp + fp + fn_ + tn;
+            let _ = writeln!(
+                md,
+                "| {group} | {label} | {n} | {tp} | {fp} | {fn_} | {tn} | {} | {} | {} |",
+                pct(tp + tn, n),
+                pct(*fp, fp + tn),
+                pct(*fp, tp + fp)
+            );
+        }
+    }
+    let mut failures = mvgrasp_grasp::physics::StageCounts::default();
+    for r in records {
+        failures += r.outcome_failures;
+    }
+    let _ = writeln!(
+        md,
+        "
+The outcomes' failed trials: settle {}, approach {}, close {}, lift {}, shake {}.
+",
+        failures.settle, failures.approach, failures.close, failures.lift, failures.shake
+    );
 }
 
 /// `markdown` (the subset [`markdown`] writes: headings, paragraphs, lists, tables, images,
