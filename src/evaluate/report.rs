@@ -532,7 +532,7 @@ fn clutter_table(md: &mut String, results: &Results) {
          taken away) or into a bin (its walls seen and in the trial), and grasps until the table \
          is empty, two grasps in a row fail or no grasp is found, planned on rendered depth or \
          on depth predicted from colour views (the objects in random colours, the method given \
-         the foreground as its masks) by the method named (1 view: the top-down GQ-CNN; more: \
+         the foreground as its masks, a bin's walls at their known depth) by the method named (1 view: the top-down GQ-CNN; more: \
          the multi-view planner fusing them), without a mask, or in the bin with its inside as \
          the workspace mask{}. Success: held of grasps tried; \
          cleared: held of the objects set (less those that would not rest, taken away \
@@ -635,10 +635,14 @@ fn labels_table(md: &mut String, results: &Results) {
         .len();
     let _ = writeln!(
         md,
-        "## Labels
-
-The labels the networks learn against the trial's outcome: {} antipodal          grasps sampled on each of {objects} objects in its most probable resting pose (objects          that only roll left out), each labelled by Dex-Net 2.0's robust Ferrari-Canny label,          by the physics label (at least half of {} perturbed trials hold) and by both, and          judged by an outcome of {} other perturbed trials (held when at least half hold;          trials whose object left its pose before the hand came are left out of both).          False-positive rate: label positive of the outcomes that failed.
-",
+        "## Labels\n\nThe labels the networks learn against the trial's outcome: {} antipodal \
+         grasps sampled on each of {objects} objects in its most probable resting pose (objects \
+         that only roll left out), each labelled by Dex-Net 2.0's robust Ferrari-Canny label, \
+         by the physics label (at least half of {} perturbed trials hold) and by both, and \
+         judged by an outcome of {} other perturbed trials (held when at least half hold; \
+         trials whose object left its pose before the hand came are left out of both; a group \
+         with no grasp so judged is not shown). False-positive rate: label positive of the \
+         outcomes that failed.\n",
         config.label_grasps, config.label_trials, config.label_outcome_trials
     );
     let _ = writeln!(
@@ -655,6 +659,9 @@ The labels the networks learn against the trial's outcome: {} antipodal         
                 .iter()
                 .filter(|r| group == "all" || r.group == group),
         );
+        if tables[0].0.iter().sum::<usize>() == 0 {
+            continue;
+        }
         for (Confusion([tp, fp, fn_, tn]), label) in
             tables.iter().zip(["robust", "physics", "both"])
         {
