@@ -532,9 +532,10 @@ fn clutter_table(md: &mut String, results: &Results) {
          taken away) or into a bin (its walls seen and in the trial), and grasps until the table \
          is empty, two grasps in a row fail or no grasp is found, planned on rendered depth or \
          on depth predicted from colour views (the objects in random colours, the method given \
-         the foreground as its masks, a bin's walls at their known depth) by the method named (1 view: the top-down GQ-CNN; more: \
-         the multi-view planner fusing them), without a mask, or in the bin with its inside as \
-         the workspace mask{}. Success: held of grasps tried; \
+         the foreground as its masks, a bin's walls at their known depth) by the method \
+         named (1 view: the top-down GQ-CNN; more: the multi-view planner fusing them), \
+         without a mask, or in the bin with its inside as the workspace mask{}. Success: held \
+         of grasps tried; \
          cleared: held of the objects set (less those that would not rest, taken away \
          uncounted; those that fell out of the workspace as the rest settled, and those left \
          when a round ended, count as not cleared). Intervals: Wilson, 95%, over grasps and \
