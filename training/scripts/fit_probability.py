@@ -37,7 +37,7 @@ PLANNERS = {
 }
 SCORE_FLOOR = 1e-4
 FOLDS = 5
-# The report's bins (src/evaluate/report.rs, QUALITY_BINS): upper ends.
+# The report's bins (src/evaluate/report/mod.rs, QUALITY_BINS): upper ends.
 BINS = [0.5, 0.7, 0.8, 0.9, 0.95, 1.0]
 L2 = 1e-3
 

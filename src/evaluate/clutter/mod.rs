@@ -36,7 +36,7 @@
 use std::cell::OnceCell;
 use std::rc::Rc;
 
-use mvgrasp_geometry::{Camera, Intrinsics, IntrinsicsPreset, Pose3, Rot3, TriangleMesh, Vec3};
+use mvgrasp_geometry::{Camera, IntrinsicsPreset, Pose3, Rot3, TriangleMesh, Vec3};
 use mvgrasp_grasp::LabelSettings;
 use mvgrasp_grasp::physics::{
     Drop, FailureStage, PhysicsObject, PileParams, box_walls, drop_pile, settle_objects,
@@ -49,17 +49,21 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use super::objects::ObjectRef;
-use crate::depth_from_rgb::checked;
 use crate::error::{Error, ErrorKind, Result};
 use crate::grasp_dataset::clutter::{ClutterParams, Neighbour, place};
 use crate::planner::{
-    DepthFrom, DepthImage, DepthPredictor, GqcnnPolicy, Mask, PlanOptions, Planner, RgbInput,
-    SensorPlanParams, View, models, plan_on_view, plan_on_views,
+    DepthFrom, DepthPredictor, GqcnnPolicy, PlanOptions, Planner, RgbInput, SensorPlanParams, View,
+    models, plan_on_view, plan_on_views,
 };
-use crate::scene::{OBJECT_ID, SceneData, TABLE_HALF_SIDE_M, render_depths, render_frames};
-use crate::stereo::RgbView;
+use crate::scene::render_depths;
 use mvgrasp_planner::seed::splitmix;
-use mvgrasp_render::{Colors, Lighting, MeshInput, random_colors};
+
+mod record;
+mod views;
+
+pub use record::{Attempt, Outcome, RoundRecord};
+pub use views::cameras;
+use views::{BIN_MARGIN_M, bin_mask};
 
 /// The scenes the suite knows.
 pub const SCENES: [&str; 3] = ["packed", "pile", "bin"];
@@ -115,65 +119,6 @@ impl std::str::FromStr for ClutterScene {
     }
 }
 
-/// What came of one attempt.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Outcome {
-    /// Held through the shake, alone: taken away.
-    Held,
-    /// Failed at this phase of the trial.
-    Failed(String),
-    /// The planner returned no grasp: the round ends.
-    NoGrasp,
-    /// The object nearest the grasp did not stay at rest, twice: taken away uncounted.
-    Unsettled,
-}
-
-/// One attempt of a round.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Attempt {
-    /// The object nearest the grasp's centre (`None` when there was no grasp).
-    pub object: Option<String>,
-    /// Objects on the table before it.
-    pub objects_left: usize,
-    /// The planner's quality of its grasp.
-    pub quality: Option<f32>,
-    /// What came of it.
-    pub outcome: Outcome,
-    /// How far the object's centre of mass had risen when the trial ended, metres (`None`
-    /// without a trial): on a failure after the close, whether the object itself came up (a
-    /// neighbour that came with it failed the phase) or slipped out.
-    #[serde(default)]
-    pub lift_m: Option<f32>,
-}
-
-/// One round: its scene and every attempt.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct RoundRecord {
-    /// How the objects were set.
-    pub scene: ClutterScene,
-    /// The number of depth views planned on.
-    pub views: usize,
-    /// The round's index (its scene's seed).
-    pub round: usize,
-    /// The cameras' intrinsics preset.
-    #[serde(default = "phoxi")]
-    pub camera: String,
-    /// Their distance from the table's centre, metres.
-    #[serde(default = "seventy_cm")]
-    pub distance_m: f32,
-    /// The depth-from-RGB method that predicted the views' depth (`plan --depth-from`'s
-    /// name); `None`: rendered depth.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub depth_from: Option<String>,
-    /// Objects on the table once the scene was set (a pile's that fell out not counted).
-    pub objects: usize,
-    /// Objects that left the workspace as the others settled after a grasp (not cleared).
-    pub fell_out: usize,
-    /// The attempts, in order.
-    pub attempts: Vec<Attempt>,
-}
-
 /// The depths of the shipped top-down GQ-CNN's training cameras (its dataset's
 /// `radius_m`, `training/configs/datasets/topdown.toml`), metres.
 pub const TRAINING_DEPTHS_M: [f32; 2] = [0.65, 0.75];
@@ -181,70 +126,9 @@ pub const TRAINING_DEPTHS_M: [f32; 2] = [0.65, 0.75];
 /// The rounds' cameras by default: a PhoXi S 0.7 m from the table's centre.
 pub const DEFAULT_CAMERA: (IntrinsicsPreset, f32) = (IntrinsicsPreset::PhoxiS, 0.7);
 
-fn phoxi() -> String {
-    DEFAULT_CAMERA.0.name().to_string()
-}
-
-fn seventy_cm() -> f32 {
-    DEFAULT_CAMERA.1
-}
-
-impl RoundRecord {
-    /// Grasps tried in the trial.
-    pub fn tried(&self) -> usize {
-        self.attempts
-            .iter()
-            .filter(|a| matches!(a.outcome, Outcome::Held | Outcome::Failed(_)))
-            .count()
-    }
-
-    /// Grasps that held (objects cleared).
-    pub fn held(&self) -> usize {
-        self.count(&Outcome::Held)
-    }
-
-    /// Objects taken away uncounted.
-    pub fn unsettled(&self) -> usize {
-        self.count(&Outcome::Unsettled)
-    }
-
-    fn count(&self, outcome: &Outcome) -> usize {
-        self.attempts
-            .iter()
-            .filter(|a| a.outcome == *outcome)
-            .count()
-    }
-}
-
 /// Times a round settles its scene again for an object that would not stay at rest before one
 /// is taken away uncounted.
 const MAX_RESETTLES: usize = 2;
-
-/// The rounds' cameras: the top-down one first, then `views - 1` around at 50 degrees, all
-/// `distance` metres from the table's centre, each a `preset` camera.
-///
-/// # Errors
-/// A distance at which a camera cannot look (not positive and finite).
-pub fn cameras(views: usize, preset: IntrinsicsPreset, distance: f32) -> Result<Vec<Camera>> {
-    let k = Intrinsics::preset(preset);
-    let mut cameras = vec![Camera::look_at(
-        k,
-        Vec3::new(0.0, 0.0, distance),
-        Vec3::ZERO,
-        Vec3::Y,
-    )?];
-    let elevation = 50.0f32.to_radians();
-    for i in 1..views {
-        let azimuth = std::f32::consts::TAU * (i - 1) as f32 / (views - 1) as f32;
-        let eye = Vec3::new(
-            elevation.cos() * azimuth.cos(),
-            elevation.cos() * azimuth.sin(),
-            elevation.sin(),
-        ) * distance;
-        cameras.push(Camera::look_at(k, eye, Vec3::ZERO, Vec3::Z)?);
-    }
-    Ok(cameras)
-}
 
 /// An object of the pool, built on first use: its mesh, hand-check shape, poses and trial
 /// shapes.
@@ -545,7 +429,14 @@ impl ClutterSuite {
             Some(rgb) => {
                 let objects = TriangleMesh::concatenate(&parts, parts[0].origin())?;
                 let colours = splitmix(((round as u64) << 32) ^ seed);
-                self.predicted_depths(renderer, rgb, &objects, walls, cameras, colours)?
+                views::predicted_depths(
+                    renderer,
+                    rgb,
+                    &objects,
+                    walls.then_some(&self.bin),
+                    cameras,
+                    colours,
+                )?
             }
         };
         let inside = ClutterScene::Bin.pile_params().box_half_side_m - BIN_MARGIN_M;
@@ -595,73 +486,6 @@ impl ClutterSuite {
             Err(e) if e.kind() == ErrorKind::Planning => Ok(None),
             Err(e) => Err(e.into()),
         }
-    }
-
-    /// Depth predicted by `rgb`'s method from colour views of `objects` (random colours per
-    /// vertex seeded by `seed`) on the grey table, in the bin with its walls. The method's
-    /// masks are the foreground, objects and walls (what is not the table, as a picker that
-    /// knows its empty workspace tells apart), so that a wall hiding an object does not carve
-    /// it away; the walls' own pixels then take their known depth (the bin is a fixture whose
-    /// place the picker knows, as the table's), the objects' the method's.
-    fn predicted_depths(
-        &self,
-        renderer: &Renderer,
-        rgb: &RgbInput,
-        objects: &TriangleMesh,
-        walls: bool,
-        cameras: &[Camera],
-        seed: u64,
-    ) -> Result<Vec<DepthImage>> {
-        let colours = random_colors(seed, objects.vertices().len());
-        let data = SceneData::of_mesh(objects, &Pose3::IDENTITY, TABLE_HALF_SIDE_M);
-        let mut inputs = data.mesh_inputs(objects.triangles(), Colors::PerVertex(&colours), true);
-        let bin = SceneData::of_mesh(&self.bin, &Pose3::IDENTITY, 0.0);
-        if walls {
-            let wall = bin.mesh_inputs(self.bin.triangles(), Colors::Uniform(WALL_RGB), false);
-            inputs.extend(wall.into_iter().map(|w| MeshInput {
-                instance_id: WALL_ID,
-                ..w
-            }));
-        }
-        let frames = render_frames(renderer, &inputs, cameras, &Lighting::Headlight)?;
-        let views: Vec<RgbView> = cameras
-            .iter()
-            .zip(&frames)
-            .map(|(camera, frame)| RgbView {
-                camera: *camera,
-                rgb: frame
-                    .rgb
-                    .chunks_exact(3)
-                    .map(|p| [p[0], p[1], p[2]])
-                    .collect(),
-                mask: Some(
-                    frame
-                        .mask
-                        .iter()
-                        .map(|&m| m == OBJECT_ID || m == WALL_ID)
-                        .collect(),
-                ),
-            })
-            .collect();
-        let predicted = checked(&rgb.depth, &views)?;
-        let depths = cameras
-            .iter()
-            .zip(frames)
-            .zip(predicted)
-            .map(|((camera, frame), p)| {
-                let depth = p
-                    .depth_m
-                    .iter()
-                    .zip(&frame.mask)
-                    .zip(&frame.depth_m)
-                    .map(
-                        |((&predicted, &id), &known)| if id == WALL_ID { known } else { predicted },
-                    )
-                    .collect();
-                DepthImage::new(camera.intrinsics, depth)
-            })
-            .collect::<mvgrasp_planner::Result<_>>()?;
-        Ok(depths)
     }
 
     /// `drawn` packed on the table: the first at the origin in its most probable resting pose,
@@ -736,35 +560,6 @@ fn on_table(object: &Drawn, pose: Pose3) -> OnTable {
         shape: Rc::clone(&object.1),
         pose,
     }
-}
-
-/// How far inside the bin's walls its workspace mask ends, metres.
-const BIN_MARGIN_M: f32 = 0.01;
-
-/// The bin's mask id in the colour views (the scene's object and table are 1 and 2).
-const WALL_ID: u8 = 3;
-
-/// The bin's colour: a plain blue tote.
-const WALL_RGB: [u8; 3] = [70, 100, 150];
-
-/// The pixels of `depth` that see something standing over the bin's floor (within `inside`
-/// of its centre, 3 mm or more above it); `None` when there is none.
-fn bin_mask(camera: &Camera, depth: &DepthImage, inside: f32) -> Option<Mask> {
-    let width = depth.width();
-    let pixels = depth
-        .as_slice()
-        .iter()
-        .enumerate()
-        .map(|(i, &z)| {
-            if !(z > 0.0 && z.is_finite()) {
-                return false;
-            }
-            let (u, v) = ((i as u32 % width) as f32, (i as u32 / width) as f32);
-            let p = camera.unproject(u, v, z);
-            p.x.abs() < inside && p.y.abs() < inside && p.z > 0.003
-        })
-        .collect();
-    Mask::new(width, depth.height(), pixels).ok()
 }
 
 /// A rotation drawn uniformly (Shoemake's subgroup algorithm).

@@ -1,0 +1,132 @@
+//! What a round's cameras see: where they stand, the depth of colour views predicted by a
+//! depth-from-RGB method, and the bin's workspace mask.
+
+use mvgrasp_geometry::{Camera, Intrinsics, IntrinsicsPreset, Pose3, TriangleMesh, Vec3};
+use mvgrasp_planner::DepthImage;
+use mvgrasp_planner::Mask;
+use mvgrasp_render::{Colors, Lighting, MeshInput, Renderer, random_colors};
+
+use crate::depth_from_rgb::checked;
+use crate::error::Result;
+use crate::planner::RgbInput;
+use crate::scene::{OBJECT_ID, SceneData, TABLE_HALF_SIDE_M, render_frames};
+use crate::stereo::RgbView;
+
+/// The rounds' cameras: the top-down one first, then `views - 1` around at 50 degrees, all
+/// `distance` metres from the table's centre, each a `preset` camera.
+///
+/// # Errors
+/// A distance at which a camera cannot look (not positive and finite).
+pub fn cameras(views: usize, preset: IntrinsicsPreset, distance: f32) -> Result<Vec<Camera>> {
+    let k = Intrinsics::preset(preset);
+    let mut cameras = vec![Camera::look_at(
+        k,
+        Vec3::new(0.0, 0.0, distance),
+        Vec3::ZERO,
+        Vec3::Y,
+    )?];
+    let elevation = 50.0f32.to_radians();
+    for i in 1..views {
+        let azimuth = std::f32::consts::TAU * (i - 1) as f32 / (views - 1) as f32;
+        let eye = Vec3::new(
+            elevation.cos() * azimuth.cos(),
+            elevation.cos() * azimuth.sin(),
+            elevation.sin(),
+        ) * distance;
+        cameras.push(Camera::look_at(k, eye, Vec3::ZERO, Vec3::Z)?);
+    }
+    Ok(cameras)
+}
+
+/// How far inside the bin's walls its workspace mask ends, metres.
+pub(super) const BIN_MARGIN_M: f32 = 0.01;
+
+/// The bin's mask id in the colour views (the scene's object and table are 1 and 2).
+const WALL_ID: u8 = 3;
+
+/// The bin's colour: a plain blue tote.
+const WALL_RGB: [u8; 3] = [70, 100, 150];
+
+/// The pixels of `depth` that see something standing over the bin's floor (within `inside`
+/// of its centre, 3 mm or more above it); `None` when there is none.
+pub(super) fn bin_mask(camera: &Camera, depth: &DepthImage, inside: f32) -> Option<Mask> {
+    let width = depth.width();
+    let pixels = depth
+        .as_slice()
+        .iter()
+        .enumerate()
+        .map(|(i, &z)| {
+            if !(z > 0.0 && z.is_finite()) {
+                return false;
+            }
+            let (u, v) = ((i as u32 % width) as f32, (i as u32 / width) as f32);
+            let p = camera.unproject(u, v, z);
+            p.x.abs() < inside && p.y.abs() < inside && p.z > 0.003
+        })
+        .collect();
+    Mask::new(width, depth.height(), pixels).ok()
+}
+
+/// Depth predicted by `rgb`'s method from colour views of `objects` (random colours per
+/// vertex seeded by `seed`) on the grey table, in `bin` (its walls' mesh) when there is one. The method's
+/// masks are the foreground, objects and walls (what is not the table, as a picker that
+/// knows its empty workspace tells apart), so that a wall hiding an object does not carve
+/// it away; the walls' own pixels then take their known depth (the bin is a fixture whose
+/// place the picker knows, as the table's), the objects' the method's.
+pub(super) fn predicted_depths(
+    renderer: &Renderer,
+    rgb: &RgbInput,
+    objects: &TriangleMesh,
+    bin: Option<&TriangleMesh>,
+    cameras: &[Camera],
+    seed: u64,
+) -> Result<Vec<DepthImage>> {
+    let colours = random_colors(seed, objects.vertices().len());
+    let data = SceneData::of_mesh(objects, &Pose3::IDENTITY, TABLE_HALF_SIDE_M);
+    let mut inputs = data.mesh_inputs(objects.triangles(), Colors::PerVertex(&colours), true);
+    let walls = bin.map(|bin| (bin, SceneData::of_mesh(bin, &Pose3::IDENTITY, 0.0)));
+    if let Some((bin, data)) = &walls {
+        let wall = data.mesh_inputs(bin.triangles(), Colors::Uniform(WALL_RGB), false);
+        inputs.extend(wall.into_iter().map(|w| MeshInput {
+            instance_id: WALL_ID,
+            ..w
+        }));
+    }
+    let frames = render_frames(renderer, &inputs, cameras, &Lighting::Headlight)?;
+    let views: Vec<RgbView> = cameras
+        .iter()
+        .zip(&frames)
+        .map(|(camera, frame)| RgbView {
+            camera: *camera,
+            rgb: frame
+                .rgb
+                .chunks_exact(3)
+                .map(|p| [p[0], p[1], p[2]])
+                .collect(),
+            mask: Some(
+                frame
+                    .mask
+                    .iter()
+                    .map(|&m| m == OBJECT_ID || m == WALL_ID)
+                    .collect(),
+            ),
+        })
+        .collect();
+    let predicted = checked(&rgb.depth, &views)?;
+    let depths = cameras
+        .iter()
+        .zip(frames)
+        .zip(predicted)
+        .map(|((camera, frame), p)| {
+            let depth = p
+                .depth_m
+                .iter()
+                .zip(&frame.mask)
+                .zip(&frame.depth_m)
+                .map(|((&predicted, &id), &known)| if id == WALL_ID { known } else { predicted })
+                .collect();
+            DepthImage::new(camera.intrinsics, depth)
+        })
+        .collect::<mvgrasp_planner::Result<_>>()?;
+    Ok(depths)
+}

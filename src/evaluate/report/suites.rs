@@ -1,0 +1,237 @@
+//! The tables of the depth, clutter and labels suites.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+use super::{pct, wilson_95};
+use crate::evaluate::Results;
+
+/// The depth suite's tables: per set, the seed paper's Table 1 layout for every method.
+pub(super) fn depth_tables(md: &mut String, results: &Results) {
+    use crate::evaluate::depth::{DepthErrors, METHODS};
+    let _ = writeln!(
+        md,
+        "## Depth from RGB\n\nDepth predicted from the first N of the seed paper's 10 test views \
+         ({:.2} m away, the first top-down; random colours, masks given) against the rendered \
+         depth, over the object's pixels: the median and mean error of the predicted pixels \
+         (mm), the share of object pixels predicted, the share within 5 mm (a missing pixel is \
+         not within), and the paper's normalised error (mean error over mean true depth). \
+         `sweep`: the plane sweep as `plan --rgb` uses it (unconfirmed pixels missing); \
+         `sweep-hull`: as the default run plans on it (unconfirmed pixels at the visual hull's \
+         depth); `hull`: the visual hull alone; `lsm`, `mvs`: the shipped networks.\n",
+        results.config.depth_distance_m
+    );
+    let mut sets: Vec<&str> = results.depth.iter().map(|r| r.set.as_str()).collect();
+    sets.dedup();
+    for set in sets {
+        let records: Vec<_> = results.depth.iter().filter(|r| r.set == set).collect();
+        let objects = records
+            .iter()
+            .map(|r| r.object.as_str())
+            .collect::<std::collections::BTreeSet<_>>()
+            .len();
+        let _ = writeln!(md, "### {set} ({objects} objects)\n");
+        let _ = writeln!(
+            md,
+            "| method | views | top-down: median (mm) | mean (mm) | predicted | within 5 mm | normalised | all views: median (mm) | mean (mm) | predicted | within 5 mm | normalised |\n|---|---|---|---|---|---|---|---|---|---|---|---|"
+        );
+        for &n in &results.config.depth_views {
+            for method in METHODS {
+                let (mut top, mut all) = (DepthErrors::default(), DepthErrors::default());
+                let mut found = false;
+                for r in records.iter().filter(|r| r.views == n) {
+                    for (m, t, a) in r.methods.iter().filter(|(m, ..)| m == method) {
+                        let _ = m;
+                        top.merge(t);
+                        all.merge(a);
+                        found = true;
+                    }
+                }
+                if !found {
+                    continue;
+                }
+                let cells = |e: &DepthErrors| {
+                    format!(
+                        "{:.1} | {:.1} | {:.0}% | {:.0}% | {:.4}",
+                        e.median_mm(),
+                        e.mean_mm(),
+                        100.0 * e.predicted_share(),
+                        100.0 * e.within_5mm_share(),
+                        e.normalised()
+                    )
+                };
+                let _ = writeln!(md, "| {method} | {n} | {} | {} |", cells(&top), cells(&all));
+            }
+        }
+        md.push('\n');
+    }
+}
+
+/// The clutter suite's table: per scene and number of views, success and cleared with their
+/// intervals, how the rounds ended, and GIGA's published figures beside.
+pub(super) fn clutter_table(md: &mut String, results: &Results) {
+    use crate::evaluate::clutter::Outcome;
+    let rounds = &results.clutter;
+    let _ = writeln!(
+        md,
+        "## Clutter\n\nVGN and GIGA's clutter removal in mvgrasp's trial: each round sets {} \
+         objects from the evaluation's sets packed side by side, dropped in a pile (the box \
+         taken away) or into a bin (its walls seen and in the trial), and grasps until the table \
+         is empty, two grasps in a row fail or no grasp is found, planned on rendered depth or \
+         on depth predicted from colour views (the objects in random colours, the method given \
+         the foreground as its masks, a bin's walls at their known depth) by the method \
+         named (1 view: the top-down GQ-CNN; more: the multi-view planner fusing them), \
+         without a mask, or in the bin with its inside as the workspace mask{}. Success: held \
+         of grasps tried; \
+         cleared: held of the objects set (less those that would not rest, taken away \
+         uncounted; those that fell out of the workspace as the rest settled, and those left \
+         when a round ended, count as not cleared). Intervals: Wilson, 95%, over grasps and \
+         over objects (rounds are not independent draws of either). Published, in their own \
+         simulator (pybullet) and objects: GIGA 87.9% success packed, 69.8% pile. Simulators \
+         differ: these figures are not a ranking.\n",
+        rounds.iter().map(|r| r.objects).max().unwrap_or(0),
+        if results.config.clutter_training_depths {
+            "; the top-down GQ-CNN's crops shown as from its training cameras' depths"
+        } else {
+            ""
+        }
+    );
+    let _ = writeln!(
+        md,
+        "| scene | views | cameras | depth | rounds | objects | grasps | success | cleared | ended with no grasp | failures by phase | fell out | uncounted |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+    );
+    let key = |r: &crate::evaluate::clutter::RoundRecord| {
+        (
+            r.scene,
+            r.views,
+            format!("{} {:.2} m", r.camera, r.distance_m),
+            r.depth_from
+                .as_ref()
+                .map_or_else(|| "rendered".to_string(), |m| format!("RGB, {m}")),
+        )
+    };
+    let mut keys: Vec<_> = rounds.iter().map(key).collect();
+    keys.sort();
+    keys.dedup();
+    for k in keys {
+        let of: Vec<_> = rounds.iter().filter(|r| key(r) == k).collect();
+        let (scene, views, cameras, depth) = k;
+        let sum = |f: &dyn Fn(&crate::evaluate::clutter::RoundRecord) -> usize| -> usize {
+            of.iter().map(|r| f(r)).sum()
+        };
+        let (tried, held, unsettled) = (
+            sum(&|r| r.tried()),
+            sum(&|r| r.held()),
+            sum(&|r| r.unsettled()),
+        );
+        let objects = sum(&|r| r.objects) - unsettled;
+        let no_grasp = of
+            .iter()
+            .filter(|r| {
+                r.attempts
+                    .last()
+                    .is_some_and(|a| a.outcome == Outcome::NoGrasp)
+            })
+            .count();
+        let mut phases: BTreeMap<&str, usize> = BTreeMap::new();
+        for a in of.iter().flat_map(|r| &r.attempts) {
+            if let Outcome::Failed(stage) = &a.outcome {
+                *phases.entry(stage.as_str()).or_default() += 1;
+            }
+        }
+        let phases = if phases.is_empty() {
+            "-".to_string()
+        } else {
+            phases
+                .iter()
+                .map(|(p, n)| format!("{p} {n}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let rate = |k: usize, n: usize| {
+            let (lo, hi) = wilson_95(k, n);
+            format!(
+                "{} ({k} of {n}; {:.0}-{:.0}%)",
+                pct(k, n),
+                100.0 * lo,
+                100.0 * hi
+            )
+        };
+        let _ = writeln!(
+            md,
+            "| {} | {views} | {cameras} | {depth} | {} | {objects} | {tried} | {} | {} | {no_grasp} | {phases} | {} | {unsettled} |",
+            scene.name(),
+            of.len(),
+            rate(held, tried),
+            rate(held, objects),
+            sum(&|r| r.fell_out)
+        );
+    }
+    md.push('\n');
+}
+
+/// The labels suite's confusion tables: per object group and over all, each label against the
+/// outcome.
+pub(super) fn labels_table(md: &mut String, results: &Results) {
+    use crate::evaluate::labels::Confusion;
+    let config = &results.config;
+    let records = &results.labels;
+    let objects = records
+        .iter()
+        .map(|r| (&r.set, &r.object))
+        .collect::<std::collections::BTreeSet<_>>()
+        .len();
+    let _ = writeln!(
+        md,
+        "## Labels\n\nThe labels the networks learn against the trial's outcome: {} antipodal \
+         grasps sampled on each of {objects} objects in its most probable resting pose (objects \
+         that only roll left out), each labelled by Dex-Net 2.0's robust Ferrari-Canny label, \
+         by the physics label (at least half of {} perturbed trials hold) and by both, and \
+         judged by an outcome of {} other perturbed trials (held when at least half hold; \
+         trials whose object left its pose before the hand came are left out of both; a group \
+         with no grasp so judged is not shown). False-positive rate: label positive of the \
+         outcomes that failed.\n",
+        config.label_grasps, config.label_trials, config.label_outcome_trials
+    );
+    let _ = writeln!(
+        md,
+        "| objects | label | grasps | + held | + failed | - held | - failed | agreement | false-positive rate | positives that failed |\n|---|---|---|---|---|---|---|---|---|---|"
+    );
+    let mut groups: Vec<&str> = records.iter().map(|r| r.group.as_str()).collect();
+    groups.sort_unstable();
+    groups.dedup();
+    groups.push("all");
+    for group in groups {
+        let tables = Confusion::of(
+            records
+                .iter()
+                .filter(|r| group == "all" || r.group == group),
+        );
+        if tables[0].0.iter().sum::<usize>() == 0 {
+            continue;
+        }
+        for (Confusion([tp, fp, fn_, tn]), label) in
+            tables.iter().zip(["robust", "physics", "both"])
+        {
+            let n = tp + fp + fn_ + tn;
+            let _ = writeln!(
+                md,
+                "| {group} | {label} | {n} | {tp} | {fp} | {fn_} | {tn} | {} | {} | {} |",
+                pct(tp + tn, n),
+                pct(*fp, fp + tn),
+                pct(*fp, tp + fp)
+            );
+        }
+    }
+    let mut failures = mvgrasp_grasp::physics::StageCounts::default();
+    for r in records {
+        failures += r.outcome_failures;
+    }
+    let _ = writeln!(
+        md,
+        "
+The outcomes' failed trials: settle {}, approach {}, close {}, lift {}, shake {}.
+",
+        failures.settle, failures.approach, failures.close, failures.lift, failures.shake
+    );
+}
