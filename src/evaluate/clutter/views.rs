@@ -6,11 +6,11 @@ use mvgrasp_planner::DepthImage;
 use mvgrasp_planner::Mask;
 use mvgrasp_render::{Colors, Lighting, MeshInput, Renderer, random_colors};
 
+use crate::convert::rgb_view_of;
 use crate::depth_from_rgb::checked;
 use crate::error::Result;
 use crate::planner::RgbInput;
 use crate::scene::{OBJECT_ID, SceneData, TABLE_HALF_SIDE_M, render_frames};
-use crate::stereo::RgbView;
 
 /// The rounds' cameras: the top-down one first, then `views - 1` around at 50 degrees, all
 /// `distance` metres from the table's centre, each a `preset` camera.
@@ -68,11 +68,11 @@ pub(super) fn bin_mask(camera: &Camera, depth: &DepthImage, inside: f32) -> Opti
 }
 
 /// Depth predicted by `rgb`'s method from colour views of `objects` (random colours per
-/// vertex seeded by `seed`) on the grey table, in `bin` (its walls' mesh) when there is one. The method's
-/// masks are the foreground, objects and walls (what is not the table, as a picker that
-/// knows its empty workspace tells apart), so that a wall hiding an object does not carve
-/// it away; the walls' own pixels then take their known depth (the bin is a fixture whose
-/// place the picker knows, as the table's), the objects' the method's.
+/// vertex seeded by `seed`) on the grey table, in `bin` (its walls' mesh) when there is
+/// one. The method's masks are the foreground, objects and walls (what is not the table, as a
+/// picker that knows its empty workspace tells apart), so that a wall hiding an object does
+/// not carve it away; the walls' own pixels then take their known depth (the bin is a
+/// fixture whose place the picker knows, as the table's), the objects' the method's.
 pub(super) fn predicted_depths(
     renderer: &Renderer,
     rgb: &RgbInput,
@@ -93,37 +93,31 @@ pub(super) fn predicted_depths(
         }));
     }
     let frames = render_frames(renderer, &inputs, cameras, &Lighting::Headlight)?;
-    let views: Vec<RgbView> = cameras
-        .iter()
-        .zip(&frames)
-        .map(|(camera, frame)| RgbView {
-            camera: *camera,
-            rgb: frame
-                .rgb
-                .chunks_exact(3)
-                .map(|p| [p[0], p[1], p[2]])
-                .collect(),
-            mask: Some(
-                frame
-                    .mask
-                    .iter()
-                    .map(|&m| m == OBJECT_ID || m == WALL_ID)
-                    .collect(),
-            ),
-        })
-        .collect();
+    // Each view in colour, its mask the objects' pixels and the walls'; the walls' pixels
+    // and the rendered depth kept aside.
+    let mut walls = Vec::with_capacity(frames.len());
+    let mut views = Vec::with_capacity(frames.len());
+    for (camera, frame) in cameras.iter().zip(frames) {
+        let wall: Vec<bool> = frame.mask.iter().map(|&id| id == WALL_ID).collect();
+        let (mut view, known) = rgb_view_of(camera, frame, OBJECT_ID);
+        if let Some(mask) = view.mask.as_mut() {
+            mask.iter_mut().zip(&wall).for_each(|(m, &w)| *m |= w);
+        }
+        walls.push((wall, known));
+        views.push(view);
+    }
     let predicted = checked(&rgb.depth, &views)?;
     let depths = cameras
         .iter()
-        .zip(frames)
+        .zip(walls)
         .zip(predicted)
-        .map(|((camera, frame), p)| {
+        .map(|((camera, (wall, known)), p)| {
             let depth = p
                 .depth_m
                 .iter()
-                .zip(&frame.mask)
-                .zip(&frame.depth_m)
-                .map(|((&predicted, &id), &known)| if id == WALL_ID { known } else { predicted })
+                .zip(&wall)
+                .zip(&known)
+                .map(|((&predicted, &wall), &known)| if wall { known } else { predicted })
                 .collect();
             DepthImage::new(camera.intrinsics, depth)
         })
