@@ -242,3 +242,31 @@ fn clutter_rounds_plan_on_depth_predicted_from_colour_views() {
         "{report}"
     );
 }
+
+#[test]
+fn labels_copied_from_a_run_of_other_settings_are_made_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = EvalConfig {
+        suites: vec!["labels".into()],
+        ..two_objects(dir.path())
+    };
+    let first = dir.path().join("first");
+    let before = evaluate(&config, &first, &mut Quiet).unwrap();
+    assert!(!before.labels.is_empty(), "{:?}", before.skipped);
+    let other = EvalConfig {
+        label_grasps: 1,
+        ..config
+    };
+    let second = dir.path().join("second");
+    std::fs::create_dir_all(&second).unwrap();
+    std::fs::copy(first.join("records.jsonl"), second.join("records.jsonl")).unwrap();
+    let after = evaluate(&other, &second, &mut Quiet).unwrap();
+    let mut per_object = std::collections::BTreeMap::<&str, usize>::new();
+    for r in &after.labels {
+        *per_object.entry(r.object.as_str()).or_default() += 1;
+    }
+    assert!(
+        !per_object.is_empty() && per_object.values().all(|&n| n == 1),
+        "{per_object:?}"
+    );
+}

@@ -414,7 +414,12 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
                 results.depth.extend(records);
             }
             if let Some(suite) = &label_suite {
-                let key = format!("labels|{id}");
+                // The key names the settings and the seed, so that records copied into a run
+                // of other settings are not taken for its own.
+                let key = format!(
+                    "labels|{}x{}x{}|{}|{id}",
+                    suite.grasps, suite.trials, suite.outcome_trials, config.seeds[0]
+                );
                 let records: Vec<labels::LabelRecord> = match journal.get(&key)? {
                     Some(records) => records,
                     None => {

@@ -21,10 +21,10 @@
 //! objects in random colours on the grey table (in a plain blue bin), the method given the
 //! foreground (what is not the table, as a picker that knows its empty workspace tells apart)
 //! as its masks, the planner still none; the bin's walls keep their known depth (a fixture,
-//! like the table). Depth from RGB needs 2 views or more. The grasp is
-//! tried in rapier among the others ([`mvgrasp_grasp::physics::simulate_grasp_among`]) on
-//! the object nearest its centre; it must come out alone. A held object is taken away and the rest settle (and what leaves the
-//! workspace goes, uncleared), as VGN's simulator does; after a failure the scene is as it
+//! like the table). Depth from RGB needs 2 views or more. The grasp is tried in rapier among
+//! the others ([`mvgrasp_grasp::physics::simulate_grasp_among`]) on the object nearest its
+//! centre; it must come out alone. A held object is taken away and the rest settle (and what
+//! leaves the workspace goes, uncleared), as VGN's simulator does; after a failure the scene is as it
 //! was (VGN carries the failed grasp's pushes to the next) and the next attempt samples with
 //! the next seed. When the object does not stay at rest before the hand comes (the trial's
 //! settle) the scene is settled again and the attempt repeated, uncounted; after two such
@@ -52,8 +52,8 @@ use super::objects::ObjectRef;
 use crate::error::{Error, ErrorKind, Result};
 use crate::grasp_dataset::clutter::{ClutterParams, Neighbour, place};
 use crate::planner::{
-    DepthFrom, DepthPredictor, GqcnnPolicy, PlanOptions, Planner, RgbInput, SensorPlanParams, View,
-    models, plan_on_view, plan_on_views,
+    DepthFrom, DepthPredictor, GqcnnPolicy, PlanOptions, Planner, SensorPlanParams, View, models,
+    plan_on_view, plan_on_views,
 };
 use crate::scene::render_depths;
 use mvgrasp_planner::seed::splitmix;
@@ -160,12 +160,11 @@ pub struct ClutterSuite {
     labels: LabelSettings,
     topdown: Planner,
     fused: Option<(Planner, SensorPlanParams)>,
-    /// Depth from RGB views instead of rendered depth.
-    rgb: Option<RgbInput>,
-    /// The bin's walls: each one's mesh where it stands, its trial shape (centred) and where
-    /// that stands.
-    walls: Vec<(TriangleMesh, PhysicsObject, Pose3)>,
-    /// The walls' meshes where they stand, as one mesh.
+    /// The depth-from-RGB method that predicts the views' depth instead of rendering it.
+    rgb: Option<DepthPredictor>,
+    /// The bin's walls: each one's trial shape (centred) and where it stands.
+    walls: Vec<(PhysicsObject, Pose3)>,
+    /// The walls' meshes where they stand, as one mesh (what the cameras see).
     bin: TriangleMesh,
 }
 
@@ -203,18 +202,16 @@ impl ClutterSuite {
         } else {
             None
         };
-        let walls = box_walls(&ClutterScene::Bin.pile_params())
-            .into_iter()
-            .map(|(half, centre)| {
-                let (vertices, triangles) = parry3d::shape::Cuboid::new(half).to_trimesh();
-                let mesh = TriangleMesh::new(vertices, triangles)?;
-                let physics = PhysicsObject::new(&mesh, &labels.physics_shape)?;
-                let pose = Pose3::from_translation(centre);
-                Ok((mesh.transformed(&pose), physics, pose))
-            })
-            .collect::<Result<Vec<_>>>()?;
-        let wall_meshes: Vec<TriangleMesh> = walls.iter().map(|(mesh, ..)| mesh.clone()).collect();
-        let bin = TriangleMesh::concatenate(&wall_meshes, wall_meshes[0].origin())?;
+        let mut walls = Vec::new();
+        let mut wall_meshes = Vec::new();
+        for (half, centre) in box_walls(&ClutterScene::Bin.pile_params()) {
+            let (vertices, triangles) = parry3d::shape::Cuboid::new(half).to_trimesh();
+            let mesh = TriangleMesh::new(vertices, triangles)?;
+            let pose = Pose3::from_translation(centre);
+            walls.push((PhysicsObject::new(&mesh, &labels.physics_shape)?, pose));
+            wall_meshes.push(mesh.transformed(&pose));
+        }
+        let bin = TriangleMesh::concatenate(&wall_meshes, std::path::Path::new("bin walls"))?;
         Ok(Self {
             walls,
             bin,
@@ -231,15 +228,7 @@ impl ClutterSuite {
             labels,
             topdown,
             fused,
-            rgb: depth_from
-                .map(|from| {
-                    Ok::<_, Error>(RgbInput {
-                        depth: DepthPredictor::shipped(from)?,
-                        per_face: false,
-                        photo: false,
-                    })
-                })
-                .transpose()?,
+            rgb: depth_from.map(DepthPredictor::shipped).transpose()?,
         })
     }
 
@@ -314,7 +303,7 @@ impl ClutterSuite {
         let fixed: Vec<(&PhysicsObject, Pose3)> = if scene == ClutterScene::Bin {
             self.walls
                 .iter()
-                .map(|(_, physics, pose)| (physics, *pose))
+                .map(|(physics, pose)| (physics, *pose))
                 .collect()
         } else {
             Vec::new()
@@ -327,10 +316,7 @@ impl ClutterSuite {
             round,
             camera: camera.name().to_string(),
             distance_m,
-            depth_from: self
-                .rgb
-                .as_ref()
-                .map(|rgb| rgb.depth.kind().name().to_string()),
+            depth_from: self.rgb.as_ref().map(|rgb| rgb.kind().name().to_string()),
             objects: table.len(),
             fell_out: 0,
             attempts: Vec::new(),

@@ -9,8 +9,8 @@ use mvgrasp_render::{Colors, Lighting, MeshInput, Renderer, random_colors};
 use crate::convert::rgb_view_of;
 use crate::depth_from_rgb::checked;
 use crate::error::Result;
-use crate::planner::RgbInput;
-use crate::scene::{OBJECT_ID, SceneData, TABLE_HALF_SIDE_M, render_frames};
+use crate::planner::DepthPredictor;
+use crate::scene::{OBJECT_ID, SceneData, TABLE_HALF_SIDE_M, TABLE_ID, render_frames};
 
 /// The rounds' cameras: the top-down one first, then `views - 1` around at 50 degrees, all
 /// `distance` metres from the table's centre, each a `preset` camera.
@@ -41,8 +41,8 @@ pub fn cameras(views: usize, preset: IntrinsicsPreset, distance: f32) -> Result<
 /// How far inside the bin's walls its workspace mask ends, metres.
 pub(super) const BIN_MARGIN_M: f32 = 0.01;
 
-/// The bin's mask id in the colour views (the scene's object and table are 1 and 2).
-const WALL_ID: u8 = 3;
+/// The bin's mask id in the colour views (after the scene's object and table ids).
+const WALL_ID: u8 = TABLE_ID + 1;
 
 /// The bin's colour: a plain blue tote.
 const WALL_RGB: [u8; 3] = [70, 100, 150];
@@ -67,7 +67,7 @@ pub(super) fn bin_mask(camera: &Camera, depth: &DepthImage, inside: f32) -> Opti
     Mask::new(width, depth.height(), pixels).ok()
 }
 
-/// Depth predicted by `rgb`'s method from colour views of `objects` (random colours per
+/// Depth predicted by `method` from colour views of `objects` (random colours per
 /// vertex seeded by `seed`) on the grey table, in `bin` (its walls' mesh) when there is
 /// one. The method's masks are the foreground, objects and walls (what is not the table, as a
 /// picker that knows its empty workspace tells apart), so that a wall hiding an object does
@@ -75,7 +75,7 @@ pub(super) fn bin_mask(camera: &Camera, depth: &DepthImage, inside: f32) -> Opti
 /// fixture whose place the picker knows, as the table's), the objects' the method's.
 pub(super) fn predicted_depths(
     renderer: &Renderer,
-    rgb: &RgbInput,
+    method: &DepthPredictor,
     objects: &TriangleMesh,
     bin: Option<&TriangleMesh>,
     cameras: &[Camera],
@@ -106,7 +106,7 @@ pub(super) fn predicted_depths(
         walls.push((wall, known));
         views.push(view);
     }
-    let predicted = checked(&rgb.depth, &views)?;
+    let predicted = checked(method, &views)?;
     let depths = cameras
         .iter()
         .zip(walls)
