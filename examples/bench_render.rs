@@ -121,7 +121,7 @@ fn run(args: &Args) -> CliResult<()> {
             return Err(format!("{} frames for {} views", frames.len(), views.len()).into());
         }
     }
-    let median_ms = median(&mut call_ms.clone());
+    let median_ms = mvgrasp::infer::bench::median(call_ms.clone());
     let views_per_s = views.len() as f64 / (median_ms / 1e3);
     let ms_per_view = median_ms / views.len() as f64;
     let k = Intrinsics::phoxi_s();
@@ -195,16 +195,6 @@ fn write_cameras(path: &Path, mesh: &Path, target: Vec3, cameras: &[Camera]) -> 
     });
     let text = serde_json::to_string_pretty(&json)?;
     Ok(std::fs::write(path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))?)
-}
-
-fn median(values: &mut [f64]) -> f64 {
-    values.sort_by(f64::total_cmp);
-    let n = values.len();
-    match n {
-        0 => f64::NAN,
-        _ if n % 2 == 1 => values[n / 2],
-        _ => 0.5 * (values[n / 2 - 1] + values[n / 2]),
-    }
 }
 
 fn ms_since(start: Instant) -> f64 {

@@ -52,6 +52,7 @@ fn two_objects(dir: &Path) -> EvalConfig {
         label_grasps: 3,
         label_trials: 3,
         label_outcome_trials: 4,
+        speed_runs: 1,
     }
 }
 
@@ -269,4 +270,68 @@ fn labels_copied_from_a_run_of_other_settings_are_made_again() {
         !per_object.is_empty() && per_object.values().all(|&n| n == 1),
         "{per_object:?}"
     );
+}
+
+#[test]
+fn the_speed_suite_times_every_stage_and_network_and_keeps_its_figures_when_resumed() {
+    if crate::common::renderer().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let config = EvalConfig {
+        suites: vec!["speed".into()],
+        policies: vec!["depth".into(), "rgb-fused".into()],
+        speed_runs: 2,
+        ..two_objects(dir.path())
+    };
+    let out = dir.path().join("speed");
+    let results = evaluate(&config, &out, &mut Quiet).unwrap();
+    let speed = results.speed.expect("the speed suite's record");
+    assert_eq!((speed.runs, speed.threads > 0), (2, true));
+    let names: Vec<&str> = speed.stages.iter().map(|s| s.policy.as_str()).collect();
+    assert_eq!(names, ["depth", "rgb-fused"]);
+    for s in &speed.stages {
+        assert!(
+            s.render_ms > 0.0 && s.plan_ms > 0.0 && s.check_ms > 0.0,
+            "{s:?}"
+        );
+        let parts = s.render_ms + s.depth_ms + s.plan_ms + s.fuse_ms + s.check_ms;
+        // Medians of parts need not add up to the median of sums, but not far off.
+        assert!((0.5..2.0).contains(&(parts / s.total_ms)), "{s:?}");
+    }
+    let (depth, rgb) = (&speed.stages[0], &speed.stages[1]);
+    // The top-down planner on rendered depth predicts nothing and fuses nothing (its fusion
+    // timer runs around no work); the default run does both.
+    assert!(depth.depth_ms == 0.0 && depth.fuse_ms < 1.0, "{depth:?}");
+    assert!(rgb.depth_ms > 1.0 && rgb.fuse_ms > 1.0, "{rgb:?}");
+    for network in ["gqcnn_small_topdown", "gqcnn_small_multiview"] {
+        let ours: Vec<_> = speed
+            .networks
+            .iter()
+            .filter(|n| n.network == network && n.runtime == "mvgrasp")
+            .collect();
+        assert_eq!(ours.len(), 2, "{:?}", speed.networks);
+        assert!(
+            ours.iter()
+                .all(|n| n.crops_per_s > 0.0 && n.median_ms > 0.0)
+        );
+        // Where torch ran, it scored the same crops alike.
+        for theirs in speed
+            .networks
+            .iter()
+            .filter(|n| n.network == network && n.runtime != "mvgrasp")
+        {
+            let mine = ours.iter().find(|n| n.batch == theirs.batch).unwrap();
+            assert!(
+                (mine.mean_p - theirs.mean_p).abs() < 1e-4,
+                "{mine:?} {theirs:?}"
+            );
+        }
+    }
+    assert!(!speed.peer.is_empty());
+    let report = std::fs::read(out.join("report.md")).unwrap();
+    assert!(String::from_utf8_lossy(&report).contains("## Speed"));
+    // Run again: the recorded figures, not new ones.
+    evaluate(&config, &out, &mut Quiet).unwrap();
+    assert_eq!(std::fs::read(out.join("report.md")).unwrap(), report);
 }

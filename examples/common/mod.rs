@@ -8,7 +8,7 @@ pub use mvgrasp::evaluate::objects::REAL_MESHES;
 #[allow(unused_imports)] // each example compiles this module; not every one takes these
 pub use mvgrasp::evaluate::report::wilson_95;
 
-/// The options of the label evaluations (`grasp_eval`, `label_eval`).
+/// The options of the label evaluation (`label_eval`).
 #[derive(clap::Args, Debug)]
 #[allow(dead_code)] // each example compiles this module; not every one takes these options
 pub struct EvalArgs {

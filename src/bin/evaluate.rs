@@ -32,8 +32,8 @@ struct Args {
     /// The full evaluation: 5 held-out built-in objects per category and every real mesh,
     /// every resting pose of at least 5%, seeds 0, 1 and 2, the exhaustive search for
     /// coverage, the policies rgb, depth, rgb-fused and depth-fused, 50 clutter rounds of
-    /// each scene from 1 and 5 views, and 20 grasps' labels per object judged by 50 trials
-    /// (hours on 2 cores).
+    /// each scene from 1 and 5 views, 20 grasps' labels per object judged by 50 trials, and
+    /// 15 timed plans per policy (hours on 2 cores).
     /// Options given beside it override its choices.
     #[arg(long)]
     full: bool,
@@ -71,7 +71,8 @@ struct Args {
     /// A suite (repeat): grasps (plans checked in the trial), depth (depth from RGB against
     /// the rendered depth), clutter (VGN and GIGA's clutter-removal rounds, packed, pile and
     /// bin, drawn from the object sets), labels (the robust and physics labels of sampled
-    /// grasps against an outcome of more trials). Default: all four.
+    /// grasps against an outcome of more trials), speed (each stage's median on the default
+    /// object, and the networks beside torch where it installs). Default: all five.
     #[arg(long = "suite")]
     suites: Vec<String>,
     /// The depth suite's numbers of input views (default: 1,3,5,9).
@@ -119,6 +120,9 @@ struct Args {
     /// Its perturbed trials of the outcome the labels are judged by (default 20; --full: 50).
     #[arg(long)]
     label_outcome_trials: Option<usize>,
+    /// The speed suite's timed plans per policy (default 5; --full: 15).
+    #[arg(long)]
+    speed_runs: Option<usize>,
     /// Plain progress lines even on a terminal.
     #[arg(long)]
     plain: bool,
@@ -153,6 +157,7 @@ fn config_of(args: &Args) -> EvalConfig {
         config.clutter_rounds = 50;
         config.label_grasps = 20;
         config.label_outcome_trials = 50;
+        config.speed_runs = 15;
     }
     if !args.sets.is_empty() {
         config.sets.clone_from(&args.sets);
@@ -205,6 +210,9 @@ fn config_of(args: &Args) -> EvalConfig {
     if let Some(n) = args.label_outcome_trials {
         config.label_outcome_trials = n;
     }
+    if let Some(n) = args.speed_runs {
+        config.speed_runs = n;
+    }
     if let Some(from) = &args.clutter_depth_from {
         config.clutter_depth_from = Some(from.clone());
     }
@@ -240,12 +248,17 @@ fn run(args: &Args) -> CliResult<()> {
     }
     println!(
         "{} plans on {} objects and poses, {} depth records, {} clutter rounds, {} labelled \
-         grasps: {}",
+         grasps{}: {}",
         results.grasps.len(),
         results.objects.len(),
         results.depth.len(),
         results.clutter.len(),
         results.labels.len(),
+        if results.speed.is_some() {
+            ", timings"
+        } else {
+            ""
+        },
         args.out.join("report.md").display()
     );
     Ok(())

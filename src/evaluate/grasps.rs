@@ -3,7 +3,7 @@
 //! Optionally an exhaustive search on the true mesh says whether any grasp in reach holds
 //! (coverage).
 
-use mvgrasp_geometry::{Pose3, RestingPoses, Vec3};
+use mvgrasp_geometry::{Pose3, RestingPoses, TriangleMesh, Vec3};
 use mvgrasp_grasp::physics::{FailureStage, PhysicsObject};
 use mvgrasp_grasp::{AnalysisConfig, GraspObject, Gripper, analyse, label_grasps};
 use mvgrasp_planner::tilt_rad;
@@ -11,7 +11,9 @@ use mvgrasp_render::Renderer;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::planner::{ChanceSource, DepthFrom, PlanOptions, PlanParams, Planner, plan_grasp};
+use crate::planner::{
+    ChanceSource, DepthFrom, PlanOptions, PlanParams, PlanReport, Planner, plan_grasp,
+};
 
 /// A planner as the evaluation names it: `plan`'s options.
 #[derive(Clone, Debug, PartialEq)]
@@ -318,12 +320,7 @@ impl ReadyPolicy {
         object: &GraspObject,
         (name, pose, seed): (&str, usize, u64),
     ) -> Result<GraspRecord> {
-        let params = PlanParams {
-            stable_pose: pose,
-            seed,
-            ..self.params.clone()
-        };
-        let report = plan_grasp(renderer, object.mesh(), &self.planner, &params)?;
+        let report = self.plan(renderer, object.mesh(), pose, seed)?;
         let best = report.best;
         let outcome = match (&best, report.physics) {
             (None, _) => "no grasp".to_string(),
@@ -349,6 +346,26 @@ impl ReadyPolicy {
             tilt_deg: best.map(|b| tilt_rad(&b.grasp).to_degrees()),
             grasp: best.map(|b| b.grasp),
         })
+    }
+
+    /// Plans on `mesh` in offered pose `pose` with `seed` (and tries the grasp), as `plan`
+    /// would.
+    ///
+    /// # Errors
+    /// A renderer, network or trial error.
+    pub fn plan(
+        &self,
+        renderer: &Renderer,
+        mesh: &TriangleMesh,
+        pose: usize,
+        seed: u64,
+    ) -> Result<PlanReport> {
+        let params = PlanParams {
+            stable_pose: pose,
+            seed,
+            ..self.params.clone()
+        };
+        Ok(plan_grasp(renderer, mesh, &self.planner, &params)?)
     }
 
     /// Where the chance to hold of this policy's grasps comes from, if anywhere.

@@ -12,7 +12,8 @@
 //! The depth suite ([`depth`]) scores depth from RGB against the rendered depth (the seed
 //! paper's Table 1); the clutter suite ([`clutter`]) runs VGN and GIGA's clutter-removal
 //! rounds; the labels suite ([`labels`]) judges the labels the networks learn by an outcome of
-//! more trials.
+//! more trials; the speed suite ([`speed`]) times each stage of the policies' plans and the
+//! networks beside torch.
 
 pub mod clutter;
 pub mod depth;
@@ -21,6 +22,7 @@ pub mod journal;
 pub mod labels;
 pub mod objects;
 pub mod report;
+pub mod speed;
 
 use std::path::{Path, PathBuf};
 
@@ -101,6 +103,9 @@ pub struct EvalConfig {
     /// Its perturbed trials of the outcome the labels are judged by.
     #[serde(default = "twenty")]
     pub label_outcome_trials: usize,
+    /// The speed suite's timed plans per policy.
+    #[serde(default = "five")]
+    pub speed_runs: usize,
 }
 
 fn ten() -> usize {
@@ -150,7 +155,7 @@ fn paper_distance_m() -> f32 {
 }
 
 /// The suites [`evaluate`] knows.
-pub const SUITES: [&str; 4] = ["grasps", "depth", "clutter", "labels"];
+pub const SUITES: [&str; 5] = ["grasps", "depth", "clutter", "labels", "speed"];
 
 impl EvalConfig {
     /// The small default: 1 held-out built-in object per category and the first 6 real meshes,
@@ -179,6 +184,7 @@ impl EvalConfig {
             label_grasps: ten(),
             label_trials: ten(),
             label_outcome_trials: twenty(),
+            speed_runs: five(),
         }
     }
 }
@@ -217,6 +223,9 @@ pub struct Results {
     /// The labels suite's grasps.
     #[serde(default)]
     pub labels: Vec<labels::LabelRecord>,
+    /// The speed suite's timings.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub speed: Option<speed::SpeedRecord>,
     /// Objects (or clutter rounds) that could not be evaluated, and why.
     pub skipped: Vec<(String, String)>,
 }
@@ -254,6 +263,9 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
         .collect::<Result<_>>()?;
     if let Some(n) = config.clutter_views.iter().find(|n| !(1..=9).contains(*n)) {
         return Err(invalid(format!("clutter views {n}: expected 1 to 9")));
+    }
+    if config.speed_runs == 0 {
+        return Err(invalid("speed runs 0: the suite needs at least one".into()));
     }
     if config.clutter_objects == 0 {
         return Err(invalid(
@@ -315,8 +327,9 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
     }
     let renderer = Renderer::new(mvgrasp_render::Backend::Auto)?;
     let run_grasps = config.suites.iter().any(|s| s == "grasps");
-    // The policies' networks, loaded only for the grasp suite.
-    let ready: Vec<ReadyPolicy> = if run_grasps {
+    let run_speed = config.suites.iter().any(|s| s == "speed");
+    // The policies' networks, loaded only for the grasp and speed suites.
+    let ready: Vec<ReadyPolicy> = if run_grasps || run_speed {
         policies
             .into_iter()
             .map(ReadyPolicy::new)
@@ -348,6 +361,7 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
         depth: Vec::new(),
         clutter: Vec::new(),
         labels: Vec::new(),
+        speed: None,
         skipped: Vec::new(),
     };
     let depth_suite = if config.suites.iter().any(|s| s == "depth") {
@@ -378,7 +392,7 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
             outcome_trials: config.label_outcome_trials,
         });
     let per_object = run_grasps || depth_suite.is_some() || label_suite.is_some();
-    let total = if per_object { objects.len() } else { 0 } + rounds.len();
+    let total = if per_object { objects.len() } else { 0 } + rounds.len() + usize::from(run_speed);
     for (done, object) in objects.iter().enumerate().filter(|_| per_object) {
         let id = format!("{}|{}", object.set, object.name);
         let mut work = || -> Result<()> {
@@ -497,6 +511,24 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
                 .into_iter()
                 .map(|(name, why)| (format!("clutter|{name}"), why)),
         );
+    }
+    if run_speed {
+        let key = format!("speed|{}", config.speed_runs);
+        let mut work = || -> Result<speed::SpeedRecord> {
+            if let Some(record) = journal.get(&key)? {
+                return Ok(record);
+            }
+            let suite = speed::SpeedSuite {
+                runs: config.speed_runs,
+                network_seconds: 1.0,
+            };
+            journal.put(&key, &suite.run(&renderer, &ready)?)
+        };
+        match work() {
+            Ok(record) => results.speed = Some(record),
+            Err(e) => results.skipped.push((key.clone(), e.to_string())),
+        }
+        progress.step(total, total, &key);
     }
     report::write(&results, out)?;
     Ok(results)

@@ -9,7 +9,7 @@ use super::Results;
 use super::grasps::{GraspRecord, PlacedObject, PoseKind};
 use crate::error::{Error, Result};
 use html::html;
-use suites::{clutter_table, depth_tables, labels_table};
+use suites::{clutter_table, depth_tables, labels_table, speed_tables};
 
 mod html;
 mod suites;
@@ -170,6 +170,9 @@ pub fn markdown(results: &Results) -> String {
     }
     if !results.labels.is_empty() {
         labels_table(&mut md, results);
+    }
+    if let Some(speed) = &results.speed {
+        speed_tables(&mut md, speed);
     }
     if results.grasps.is_empty() {
         return md;

@@ -235,3 +235,62 @@ The outcomes' failed trials: settle {}, approach {}, close {}, lift {}, shake {}
         failures.settle, failures.approach, failures.close, failures.lift, failures.shake
     );
 }
+
+/// The speed suite's tables: each policy's stages, and each network in mvgrasp's runtime
+/// beside torch.
+pub(super) fn speed_tables(md: &mut String, speed: &crate::evaluate::speed::SpeedRecord) {
+    let _ = writeln!(
+        md,
+        "## Speed\n\nEach policy's plan of the default run's object (the built-in mug), the \
+         median of {} timed plans after a warm-up, milliseconds, on {} ({} threads). `render`: \
+         the views (in colour when the depth comes from RGB); `depth`: predicting their depth \
+         from RGB; `fuse`: fusing the views; `plan`: sampling, cropping and scoring candidates, \
+         the hand check and re-scoring; `checks`: the analytic label and the physics trial of \
+         the best grasp. Timings are measured, not seeded: another run gives other figures.\n",
+        speed.runs, speed.cpu, speed.threads
+    );
+    let _ = writeln!(
+        md,
+        "| policy | render | depth | fuse | plan | checks | total |\n|---|---|---|---|---|---|---|"
+    );
+    for s in &speed.stages {
+        let _ = writeln!(
+            md,
+            "| {} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} |",
+            s.policy, s.render_ms, s.depth_ms, s.fuse_ms, s.plan_ms, s.check_ms, s.total_ms
+        );
+    }
+    let _ = writeln!(
+        md,
+        "\nThe shipped GQ-CNNs scoring seeded batches of crops (softmax included) in mvgrasp's \
+         runtime and in torch on the same inputs and threads (`benches/gqcnn/bench_torch.py`; \
+         `torch-ftz`: with denormals flushed, as mvgrasp's runtime flushes them at load); the \
+         mean probability is a check that both scored alike. Peer: {}.\n",
+        speed.peer
+    );
+    let _ = writeln!(
+        md,
+        "| network | runtime | batch | median (ms) | crops/s | against the faster torch | mean probability |\n|---|---|---|---|---|---|---|"
+    );
+    for n in &speed.networks {
+        // mvgrasp's crops per second over the faster torch's, same network and batch.
+        let torch = speed
+            .networks
+            .iter()
+            .filter(|t| t.runtime != "mvgrasp" && (&t.network, t.batch) == (&n.network, n.batch))
+            .map(|t| t.crops_per_s)
+            .fold(None, |best: Option<f64>, c| {
+                Some(best.map_or(c, |b| b.max(c)))
+            });
+        let ratio = match torch {
+            Some(t) if n.runtime == "mvgrasp" => format!("{:.1}x", n.crops_per_s / t),
+            _ => "-".into(),
+        };
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {:.2} | {:.0} | {ratio} | {:.3e} |",
+            n.network, n.runtime, n.batch, n.median_ms, n.crops_per_s, n.mean_p
+        );
+    }
+    md.push('\n');
+}
