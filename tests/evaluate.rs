@@ -41,6 +41,7 @@ fn two_objects(dir: &Path) -> EvalConfig {
         ],
         depth_views: vec![1, 2],
         depth_distance_m: 0.5,
+        depth_photo: false,
         clutter_scenes: vec!["packed".into(), "pile".into(), "bin".into()],
         clutter_views: vec![1],
         clutter_rounds: 1,
@@ -334,4 +335,59 @@ fn the_speed_suite_times_every_stage_and_network_and_keeps_its_figures_when_resu
     // Run again: the recorded figures, not new ones.
     evaluate(&config, &out, &mut Quiet).unwrap();
     assert_eq!(std::fs::read(out.join("report.md")).unwrap(), report);
+}
+
+#[test]
+fn the_depth_suite_scores_every_method_and_tallies_the_confidence_of_the_networks() {
+    if crate::common::renderer().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let flat = EvalConfig {
+        suites: vec!["depth".into()],
+        depth_views: vec![2],
+        ..two_objects(dir.path())
+    };
+    let first = dir.path().join("flat");
+    let results = evaluate(&flat, &first, &mut Quiet).unwrap();
+    assert_eq!(results.depth.len(), 2, "{:?}", results.skipped);
+    for record in &results.depth {
+        let methods: Vec<&str> = record.methods.iter().map(|(m, ..)| m.as_str()).collect();
+        assert_eq!(
+            methods,
+            ["lsm", "mvs", "refined", "sweep", "sweep-hull", "hull"]
+        );
+        for (method, bins) in &record.reliability {
+            let (_, _, all) = record.methods.iter().find(|(m, ..)| m == method).unwrap();
+            // Every object pixel lands in one tenth, and its within-5 mm count is the method's.
+            let pixels: u64 = bins.iter().map(|b| b[0]).sum();
+            let good: u64 = bins.iter().map(|b| b[1]).sum();
+            assert_eq!(
+                (pixels, good),
+                (all.object_pixels, all.within_5mm),
+                "{method}"
+            );
+        }
+        let confident: Vec<&str> = record.reliability.iter().map(|(m, _)| m.as_str()).collect();
+        assert_eq!(confident, ["mvs", "refined"]);
+    }
+    let report = std::fs::read_to_string(first.join("report.md")).unwrap();
+    assert!(
+        report.contains("| refined | 2 |") && report.contains("Reliability"),
+        "{report}"
+    );
+
+    // The photographic look: records copied from the flat run are not taken for its own.
+    let photo = EvalConfig {
+        depth_photo: true,
+        ..flat
+    };
+    let second = dir.path().join("photo");
+    std::fs::create_dir_all(&second).unwrap();
+    std::fs::copy(first.join("records.jsonl"), second.join("records.jsonl")).unwrap();
+    let photographed = evaluate(&photo, &second, &mut Quiet).unwrap();
+    assert_eq!(photographed.depth.len(), 2, "{:?}", photographed.skipped);
+    assert_ne!(photographed.depth, results.depth);
+    let report = std::fs::read_to_string(second.join("report.md")).unwrap();
+    assert!(report.contains("the photographic look"), "{report}");
 }

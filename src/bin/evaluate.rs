@@ -81,6 +81,10 @@ struct Args {
     /// The depth suite's camera distance, metres (default: 0.5, the paper's test views).
     #[arg(long)]
     depth_distance_m: Option<f32>,
+    /// The depth suite's views with the photographic look (textures, gloss, room lights, a
+    /// background, sensor noise, blur, JPEG) instead of random colours.
+    #[arg(long)]
+    depth_photo: bool,
     /// A clutter scene (repeat): packed, pile, bin (default all three).
     #[arg(long = "clutter-scene")]
     clutter_scenes: Vec<String>,
@@ -217,6 +221,7 @@ fn config_of(args: &Args) -> EvalConfig {
         config.clutter_depth_from = Some(from.clone());
     }
     config.all_poses |= args.all_poses;
+    config.depth_photo |= args.depth_photo;
     config.clutter_training_depths |= args.clutter_training_depths;
     config.coverage |= args.coverage;
     config

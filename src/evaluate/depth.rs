@@ -3,12 +3,17 @@
 //! view and every view scored).
 //!
 //! Each object rests in its most probable pose and is seen by the paper's 10 test views (the
-//! first top-down) at the suite's distance, in random colours with its masks; depth is
-//! predicted from the first N views. Methods: `lsm` (the shipped Learnt Stereo Machine, the
-//! only one that takes one view), `mvs` (the shipped multi-view stereo network, every pixel
-//! kept), `sweep` (the plane sweep as `plan --rgb` and `predict_depth` use it: unconfirmed
-//! pixels missing), `sweep-hull` (as the default run's one-view planner gets it: unconfirmed
-//! pixels at the visual hull's depth) and `hull` (the visual hull alone).
+//! first top-down) at the suite's distance, in random colours with its masks (or with the
+//! photographic look, [`crate::scene::photoreal`]); depth is predicted from the first N views.
+//! Methods: `lsm` (the shipped Learnt Stereo Machine, the only one that takes one view), `mvs`
+//! (the shipped multi-view stereo network, every pixel kept), `refined` (the plane sweep
+//! sharpened by the shipped refiner, every pixel kept), `sweep` (the plane sweep as `plan
+//! --rgb` and `predict_depth` use it: unconfirmed pixels missing), `sweep-hull` (as the
+//! default run's one-view planner gets it: unconfirmed pixels at the visual hull's depth) and
+//! `hull` (the visual hull alone). The two networks that give a confidence (`mvs`, `refined`)
+//! are also tallied by it: per tenth of confidence, the object pixels and those within 5 mm.
+
+use std::sync::Arc;
 
 use mvgrasp_geometry::{HemisphereLayout, Intrinsics, IntrinsicsPreset};
 use mvgrasp_infer::Parallelism;
@@ -19,10 +24,15 @@ use crate::error::Result;
 use crate::lsm::lsm_depths;
 use crate::mvs::mvs_depths;
 use crate::planner::{DepthPredictor, RgbInput, models, render_rgb};
+use crate::scene::photoreal::render_photoreal;
 use crate::stereo::{RgbView, SweepParams, sweep_depths};
+use crate::sweep_refiner::{RefinedSweep, Unsure};
 
 /// The methods, in the report's order.
-pub const METHODS: [&str; 5] = ["lsm", "mvs", "sweep", "sweep-hull", "hull"];
+pub const METHODS: [&str; 6] = ["lsm", "mvs", "refined", "sweep", "sweep-hull", "hull"];
+
+/// Confidence bins of the reliability tally: tenths.
+pub const CONFIDENCE_BINS: usize = 10;
 
 /// Error bins of the median, metres (0.1 mm), and their count (the last: 50 mm and more).
 const BIN_M: f64 = 1e-4;
@@ -135,22 +145,44 @@ pub struct DepthRecord {
     pub views: usize,
     /// Per method of [`METHODS`] that takes this many views: (method, top-down, all views).
     pub methods: Vec<(String, DepthErrors, DepthErrors)>,
+    /// Per method that gives a confidence: per tenth of confidence, the object pixels of all
+    /// views with a true depth and those predicted within 5 mm.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub reliability: Vec<(String, Vec<[u64; 2]>)>,
+}
+
+/// Adds each object pixel of `depth` to its confidence tenth of `bins`: [pixels, within 5 mm].
+fn tally_confidence(
+    bins: &mut [[u64; 2]],
+    (depth, confidence): (&[f32], &[f32]),
+    truth: &[f32],
+    mask: &[bool],
+) {
+    for (((&d, &c), &t), &on) in depth.iter().zip(confidence).zip(truth).zip(mask) {
+        if on && t > 0.0 {
+            let bin = ((c * CONFIDENCE_BINS as f32) as usize).min(CONFIDENCE_BINS - 1);
+            bins[bin][0] += 1;
+            bins[bin][1] += u64::from(d > 0.0 && (d - t).abs() <= 5e-3);
+        }
+    }
 }
 
 /// The suite's prepared networks and settings.
 pub struct DepthSuite {
     lsm: mvgrasp_infer::Lsm,
     mvs: mvgrasp_infer::Mvs,
+    refined: RefinedSweep,
     layout: HemisphereLayout,
     input: RgbInput,
 }
 
 impl DepthSuite {
-    /// The shipped networks and the paper's test views at `distance_m`.
+    /// The shipped networks and the paper's test views at `distance_m`, in random colours or
+    /// (`photo`) with the photographic look.
     ///
     /// # Errors
     /// Shipped weights that cannot be loaded.
-    pub fn new(distance_m: f32) -> Result<Self> {
+    pub fn new(distance_m: f32, photo: bool) -> Result<Self> {
         Ok(Self {
             lsm: models::LSM
                 .load()?
@@ -158,6 +190,16 @@ impl DepthSuite {
             mvs: models::MVS
                 .load()?
                 .with_parallelism(Parallelism::all_threads()),
+            // Every pixel kept, as for the MVS network.
+            refined: RefinedSweep {
+                net: Arc::new(
+                    models::SWEEP_REFINER
+                        .load()?
+                        .with_parallelism(Parallelism::all_threads()),
+                ),
+                min_confidence: 0.0,
+                unsure: Unsure::Missing,
+            },
             layout: HemisphereLayout {
                 radius_m: distance_m,
                 ..HemisphereLayout::paper_test()
@@ -165,7 +207,7 @@ impl DepthSuite {
             input: RgbInput {
                 depth: DepthPredictor::Baseline(SweepParams::default()),
                 per_face: false,
-                photo: false,
+                photo,
             },
         })
     }
@@ -189,14 +231,18 @@ impl DepthSuite {
         let target = pose.table_from_object.transform_point(com);
         let intrinsics = Intrinsics::preset(IntrinsicsPreset::PhoxiS);
         let cameras = self.layout.cameras(intrinsics, target, seed)?;
-        let rendered = render_rgb(
-            renderer,
-            mesh,
-            &pose.table_from_object,
-            &cameras,
-            &self.input,
-            seed,
-        )?;
+        let rendered = if self.input.photo {
+            render_photoreal(renderer, mesh, &pose.table_from_object, &cameras, seed)?.views
+        } else {
+            render_rgb(
+                renderer,
+                mesh,
+                &pose.table_from_object,
+                &cameras,
+                &self.input,
+                seed,
+            )?
+        };
         let hull_fill = SweepParams {
             hull_where_unconfirmed: true,
             ..SweepParams::default()
@@ -209,9 +255,27 @@ impl DepthSuite {
                 // (method, each view's depth)
                 let mut predicted: Vec<(&str, Vec<Vec<f32>>)> =
                     vec![("lsm", lsm_depths(&self.lsm, &input)?)];
+                let mut reliability = Vec::new();
                 if n >= 2 {
-                    let mvs = mvs_depths(&self.mvs, &input, 0.0)?;
-                    predicted.push(("mvs", mvs.into_iter().map(|v| v.depth_m).collect()));
+                    let mvs: Vec<(Vec<f32>, Vec<f32>)> = mvs_depths(&self.mvs, &input, 0.0)?
+                        .into_iter()
+                        .map(|v| (v.depth_m, v.confidence))
+                        .collect();
+                    let refined: Vec<(Vec<f32>, Vec<f32>)> = self
+                        .refined
+                        .depths(&input)?
+                        .into_iter()
+                        .map(|v| (v.depth_m, v.confidence))
+                        .collect();
+                    for (method, views) in [("mvs", mvs), ("refined", refined)] {
+                        let mut bins = vec![[0u64; 2]; CONFIDENCE_BINS];
+                        for ((depth, confidence), (view, truth)) in views.iter().zip(&rendered) {
+                            let mask = view.mask.as_deref().unwrap_or(&[]);
+                            tally_confidence(&mut bins, (depth, confidence), truth, mask);
+                        }
+                        reliability.push((method.to_string(), bins));
+                        predicted.push((method, views.into_iter().map(|(d, _)| d).collect()));
+                    }
                     let swept = sweep_depths(&input, &SweepParams::default())?;
                     let filled = sweep_depths(&input, &hull_fill)?;
                     predicted.push(("sweep", swept.iter().map(|s| s.depth_m.clone()).collect()));
@@ -241,6 +305,7 @@ impl DepthSuite {
                     set: set.to_string(),
                     views: n,
                     methods,
+                    reliability,
                 })
             })
             .collect()

@@ -66,6 +66,11 @@ pub struct EvalConfig {
     /// The depth suite's camera distance, metres (the paper's test views: 0.5).
     #[serde(default = "paper_distance_m")]
     pub depth_distance_m: f32,
+    /// The depth suite's views with the photographic look ([`crate::scene::photoreal`]:
+    /// textures, gloss, room lights, a background, sensor noise, blur, JPEG) instead of random
+    /// colours under each camera's light.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub depth_photo: bool,
     /// The clutter suite's scenes ([`clutter::SCENES`]).
     #[serde(default = "every_scene")]
     pub clutter_scenes: Vec<String>,
@@ -173,6 +178,7 @@ impl EvalConfig {
             suites: SUITES.map(String::from).to_vec(),
             depth_views: paper_shots(),
             depth_distance_m: paper_distance_m(),
+            depth_photo: false,
             clutter_scenes: every_scene(),
             clutter_views: one_view(),
             clutter_rounds: small_rounds(),
@@ -365,7 +371,10 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
         skipped: Vec::new(),
     };
     let depth_suite = if config.suites.iter().any(|s| s == "depth") {
-        Some(depth::DepthSuite::new(config.depth_distance_m)?)
+        Some(depth::DepthSuite::new(
+            config.depth_distance_m,
+            config.depth_photo,
+        )?)
     } else {
         None
     };
@@ -391,6 +400,16 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
             trials: config.label_trials,
             outcome_trials: config.label_outcome_trials,
         });
+    // A depth record's key names its views' distance and look unless they are the defaults
+    // (the first records were keyed so), so that records copied from a run of other settings
+    // are made again.
+    let mut depth_setting = String::new();
+    if config.depth_distance_m != paper_distance_m() {
+        depth_setting.push_str(&format!("{}m|", config.depth_distance_m));
+    }
+    if config.depth_photo {
+        depth_setting.push_str("photo|");
+    }
     let per_object = run_grasps || depth_suite.is_some() || label_suite.is_some();
     let total = if per_object { objects.len() } else { 0 } + rounds.len() + usize::from(run_speed);
     for (done, object) in objects.iter().enumerate().filter(|_| per_object) {
@@ -410,7 +429,7 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
                 results.grasps.extend(records);
             }
             if let Some(suite) = &depth_suite {
-                let key = format!("depth|{id}");
+                let key = format!("depth|{depth_setting}{id}");
                 let records: Vec<depth::DepthRecord> = match journal.get(&key)? {
                     Some(records) => records,
                     None => {

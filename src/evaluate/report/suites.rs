@@ -5,6 +5,7 @@ use std::fmt::Write as _;
 
 use super::{pct, wilson_95};
 use crate::evaluate::Results;
+use crate::evaluate::depth::DepthRecord;
 
 /// The depth suite's tables: per set, the seed paper's Table 1 layout for every method.
 pub(super) fn depth_tables(md: &mut String, results: &Results) {
@@ -12,14 +13,21 @@ pub(super) fn depth_tables(md: &mut String, results: &Results) {
     let _ = writeln!(
         md,
         "## Depth from RGB\n\nDepth predicted from the first N of the seed paper's 10 test views \
-         ({:.2} m away, the first top-down; random colours, masks given) against the rendered \
+         ({:.2} m away, the first top-down; {}, masks given) against the rendered \
          depth, over the object's pixels: the median and mean error of the predicted pixels \
          (mm), the share of object pixels predicted, the share within 5 mm (a missing pixel is \
          not within), and the paper's normalised error (mean error over mean true depth). \
          `sweep`: the plane sweep as `plan --rgb` uses it (unconfirmed pixels missing); \
          `sweep-hull`: as the default run plans on it (unconfirmed pixels at the visual hull's \
-         depth); `hull`: the visual hull alone; `lsm`, `mvs`: the shipped networks.\n",
-        results.config.depth_distance_m
+         depth); `hull`: the visual hull alone; `lsm`, `mvs`: the shipped networks; \
+         `refined`: the plane sweep sharpened by the shipped refiner (`mvs` and `refined` keep \
+         every pixel whatever its confidence).\n",
+        results.config.depth_distance_m,
+        if results.config.depth_photo {
+            "the photographic look"
+        } else {
+            "random colours"
+        }
     );
     let mut sets: Vec<&str> = results.depth.iter().map(|r| r.set.as_str()).collect();
     sets.dedup();
@@ -64,7 +72,54 @@ pub(super) fn depth_tables(md: &mut String, results: &Results) {
             }
         }
         md.push('\n');
+        reliability_table(md, &records, &results.config.depth_views);
     }
+}
+
+/// The confidence of the networks that give one against their error: per method, number of
+/// views and tenth of confidence, the object pixels (all views) and the share within 5 mm.
+fn reliability_table(md: &mut String, records: &[&DepthRecord], views: &[usize]) {
+    use crate::evaluate::depth::CONFIDENCE_BINS;
+    // (method, views) -> per bin [pixels, within 5 mm]
+    let mut tallies: BTreeMap<(String, usize), Vec<[u64; 2]>> = BTreeMap::new();
+    for r in records {
+        for (method, bins) in &r.reliability {
+            let tally = tallies
+                .entry((method.clone(), r.views))
+                .or_insert_with(|| vec![[0; 2]; CONFIDENCE_BINS]);
+            for (t, b) in tally.iter_mut().zip(bins) {
+                t[0] += b[0];
+                t[1] += b[1];
+            }
+        }
+    }
+    if tallies.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        md,
+        "Reliability: the networks' confidence against their error (object pixels of all views \
+         per tenth of confidence: pixels, and the share within 5 mm; a calibrated confidence \
+         of 0.9 has about 90% within).\n\n| method | views | {} |\n|---|---|{}",
+        (0..CONFIDENCE_BINS)
+            .map(|b| format!("{:.1}-{:.1}", b as f64 / 10.0, (b + 1) as f64 / 10.0))
+            .collect::<Vec<_>>()
+            .join(" | "),
+        "---|".repeat(CONFIDENCE_BINS)
+    );
+    for &n in views {
+        for ((method, _), bins) in tallies.iter().filter(|((_, v), _)| *v == n) {
+            let cells: Vec<String> = bins
+                .iter()
+                .map(|&[pixels, good]| match pixels {
+                    0 => "-".into(),
+                    _ => format!("{} ({pixels})", pct(good as usize, pixels as usize)),
+                })
+                .collect();
+            let _ = writeln!(md, "| {method} | {n} | {} |", cells.join(" | "));
+        }
+    }
+    md.push('\n');
 }
 
 /// The clutter suite's table: per scene and number of views, success and cleared with their
