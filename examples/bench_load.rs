@@ -10,6 +10,8 @@
 //!    borrowed by all): a table of plans/s, p50 and p99 latency, and whether every grasp equals
 //!    the single-thread one (the same seed and image give the same `grasps.json` bytes).
 //!
+//! It fails (exit code 2) when any plan did not give the first plan's grasps.
+//!
 //! ```text
 //! cargo run --release --example bench_load -- [--plans 10000] [--threads 1 2 4]
 //!     [--thread-plans 400] [--data ../shared/data]
@@ -159,6 +161,9 @@ fn run(args: &Args) -> CliResult<()> {
     let mut rss_warm = rss_start;
     let mut samples = Vec::new();
     let mut differing = 0usize;
+    // Plans that did not give the first plan's grasps, over both parts: the example fails on
+    // any (the same seed and image give the same bytes, on any thread).
+    let mut total_differing = 0usize;
     let started = Instant::now();
     for i in 1..=n {
         if planner.plan()? != reference {
@@ -193,6 +198,8 @@ fn run(args: &Args) -> CliResult<()> {
             format!("no ({differing} of {n} differ)")
         }
     );
+
+    total_differing += differing;
 
     // 2. Throughput and latency with 1, 2, 4 threads sharing the planner.
     println!(
@@ -236,6 +243,7 @@ fn run(args: &Args) -> CliResult<()> {
             differing += d;
         }
         latencies.sort();
+        total_differing += differing;
         println!(
             "| {threads} | {:.1} | {:.1} | {:.1} | {} |",
             latencies.len() as f64 / wall,
@@ -247,6 +255,13 @@ fn run(args: &Args) -> CliResult<()> {
                 format!("no ({differing} differ)")
             }
         );
+    }
+    if total_differing > 0 {
+        return Err(format!(
+            "{total_differing} plans did not give the first plan's grasps: the planner is not \
+             deterministic"
+        )
+        .into());
     }
     Ok(())
 }
