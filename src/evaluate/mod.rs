@@ -400,10 +400,10 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
             trials: config.label_trials,
             outcome_trials: config.label_outcome_trials,
         });
-    // A depth record's key names its views' distance and look unless they are the defaults
-    // (the first records were keyed so), so that records copied from a run of other settings
-    // are made again.
-    let mut depth_setting = String::new();
+    // A depth record's key names the methods' count (records made before the refined sweep
+    // was one are made again) and its views' distance and look unless they are the defaults,
+    // so that records copied from a run of other settings are made again.
+    let mut depth_setting = format!("{}|", depth::METHODS.len());
     if config.depth_distance_m != paper_distance_m() {
         depth_setting.push_str(&format!("{}m|", config.depth_distance_m));
     }
