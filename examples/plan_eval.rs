@@ -146,11 +146,6 @@ struct Args {
     /// (`mvgrasp::scene::photoreal`) instead of the flat one.
     #[arg(long)]
     photo: bool,
-    /// Try every re-scored candidate of the fused policies in physics and write one JSON line
-    /// per candidate to this file (object, policy, rank, scores, tilt, outcome): the data for
-    /// choosing how candidates are ranked, on the development set.
-    #[arg(long)]
-    dump_rescored: Option<PathBuf>,
     /// The fused policies rank their re-scored candidates by the re-score alone, without the
     /// shipped ranker (`models/ranker_fused.json`).
     #[arg(long)]
@@ -445,22 +440,13 @@ fn run(args: &Args) -> CliResult<()> {
         prepared.push((params, gripper, planner));
     }
     let mut tallies: Vec<Tally> = policies.iter().map(|_| Tally::default()).collect();
-    let mut dump = args
-        .dump_rescored
-        .as_ref()
-        .map(|path| {
-            std::fs::File::create(path)
-                .map(std::io::BufWriter::new)
-                .map_err(|e| format!("{}: {e}", path.display()))
-        })
-        .transpose()?;
     println!(
         "object                         policy                 quality  free  robust  physics"
     );
     for (name, group, mesh) in &objects {
-        // For --top10's and --dump-rescored's checks (plan_grasp prepares its own for the best
-        // grasp).
-        let object = (args.top10 || dump.is_some())
+        // For --top10's checks (plan_grasp prepares its own for the best grasp).
+        let object = args
+            .top10
             .then(|| GraspObject::new(mesh.clone()))
             .transpose()?;
         for ((Policy { label, .. }, (params, gripper, policy)), tally) in
@@ -526,9 +512,6 @@ fn run(args: &Args) -> CliResult<()> {
             } else {
                 String::new()
             };
-            if let (Some(out), Some(object)) = (dump.as_mut(), &object) {
-                dump_rescored(out, [name, label], object, &report, (gripper, params))?;
-            }
             // The approach's angle from straight down.
             let tilt_deg = tilt_rad(&best.grasp).to_degrees();
             let bin = TILT_BINS_DEG.iter().take_while(|&&b| tilt_deg > b).count();
@@ -638,55 +621,4 @@ fn print_table2(policies: &[Policy], tallies: &[Tally]) {
         }
         println!();
     }
-}
-
-/// Every re-scored candidate of `report` (none unless the policy re-scores) tried in physics,
-/// one JSON line each.
-fn dump_rescored(
-    out: &mut impl std::io::Write,
-    [name, label]: [&str; 2],
-    object: &GraspObject,
-    report: &mvgrasp::planner::PlanReport,
-    (gripper, params): (&mvgrasp::grasp::Gripper, &PlanParams),
-) -> CliResult<()> {
-    let rescored: Vec<_> = report
-        .candidates
-        .iter()
-        .take_while(|c| c.view_quality.is_some())
-        .copied()
-        .collect();
-    if rescored.is_empty() {
-        return Ok(());
-    }
-    let labels = check_grasps(
-        object,
-        &report.table_from_object,
-        &rescored,
-        gripper,
-        params,
-    )?;
-    for (rank, (c, l)) in rescored.iter().zip(&labels).enumerate() {
-        let tilt_deg = tilt_rad(&c.grasp).to_degrees();
-        let line = serde_json::json!({
-            "object": name,
-            "policy": label,
-            "rank": rank,
-            "quality": c.quality,
-            "view_quality": c.view_quality,
-            "virtual_quality": c.virtual_quality,
-            "view": c.view,
-            "theta_rad": c.theta_rad,
-            "by_scorer": c.by_scorer,
-            "from_cloud": c.from_cloud,
-            "tilt_deg": tilt_deg,
-            "width_m": c.grasp.width_m,
-            "z_m": c.grasp.world_from_gripper.translation.z,
-            "robust": l.robust,
-            "held": l.physics.map(|p| p.success),
-            "failed_at": l.physics.and_then(|p| p.failed_at).map(|f| format!("{f:?}")),
-        });
-        writeln!(out, "{line}")?;
-    }
-    // Flushed here, so that a failed write is an error rather than lost when the writer drops.
-    Ok(out.flush()?)
 }

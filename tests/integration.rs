@@ -12,6 +12,7 @@ mod evaluate;
 mod grasp_dataset;
 mod layering;
 mod plan;
+mod ranker_data;
 mod render_depth;
 mod rgb;
 mod sensor_depth;

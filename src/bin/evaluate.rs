@@ -39,8 +39,8 @@ struct Args {
     full: bool,
     /// An object set (repeat): held-out (built-in objects past every training index), dev
     /// (built-in, where settings are chosen), real (every real mesh of --data), dev-real (50
-    /// of pybullet's random_urdfs in --data, real meshes where settings are chosen), or
-    /// folder:PATH. Default: held-out and real.
+    /// of pybullet's random_urdfs in --data, real meshes where settings are chosen),
+    /// builtin:N (built-in objects from index N), or folder:PATH. Default: held-out and real.
     #[arg(long = "set")]
     sets: Vec<String>,
     /// Built-in objects per category in the built-in sets (default 1; --full: 5).

@@ -326,7 +326,12 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
     let mut objects: Vec<ObjectRef> = Vec::new();
     for set in &sets {
         let mut found = objects::objects(set, config.per_category, &config.data)?;
-        if config.max_meshes > 0 && !matches!(set, ObjectSet::HeldOut | ObjectSet::Dev) {
+        if config.max_meshes > 0
+            && !matches!(
+                set,
+                ObjectSet::HeldOut | ObjectSet::Dev | ObjectSet::Builtin(_)
+            )
+        {
             found.truncate(config.max_meshes);
         }
         objects.extend(found);

@@ -57,6 +57,9 @@ pub enum ObjectSet {
     HeldOut,
     /// `dev`: built-in objects from [`DEV_FIRST_INDEX`].
     Dev,
+    /// `builtin:N`: built-in objects from index N (the ranker's data: 60, past every training,
+    /// evaluation and development index).
+    Builtin(u32),
     /// `real`: every real mesh of the shared mesh folder ([`REAL_MESHES`] and the household
     /// set's manifest); none when the folder is absent.
     Real,
@@ -77,12 +80,18 @@ impl std::str::FromStr for ObjectSet {
             "dev" => Ok(Self::Dev),
             "real" => Ok(Self::Real),
             "dev-real" => Ok(Self::DevReal),
-            _ => match name.strip_prefix("folder:") {
-                Some(path) if !path.is_empty() => Ok(Self::Folder(PathBuf::from(path))),
-                _ => Err(format!(
-                    "{name:?}: expected held-out, dev, real, dev-real or folder:PATH"
-                )),
-            },
+            _ => {
+                if let Some(path) = name.strip_prefix("folder:").filter(|p| !p.is_empty()) {
+                    return Ok(Self::Folder(PathBuf::from(path)));
+                }
+                match name.strip_prefix("builtin:").map(str::parse) {
+                    Some(Ok(first)) => Ok(Self::Builtin(first)),
+                    _ => Err(format!(
+                        "{name:?}: expected held-out, dev, real, dev-real, builtin:N (the first \
+                         index) or folder:PATH"
+                    )),
+                }
+            }
         }
     }
 }
@@ -93,6 +102,7 @@ impl ObjectSet {
         match self {
             Self::HeldOut => "held-out".into(),
             Self::Dev => "dev".into(),
+            Self::Builtin(first) => format!("builtin:{first}"),
             Self::Real => "real".into(),
             Self::DevReal => "dev-real".into(),
             Self::Folder(path) => format!("folder:{}", path.display()),
@@ -162,6 +172,7 @@ pub fn objects(set: &ObjectSet, per_category: u32, data: &Path) -> Result<Vec<Ob
     Ok(match set {
         ObjectSet::HeldOut => builtin(HELD_OUT_FIRST_INDEX),
         ObjectSet::Dev => builtin(DEV_FIRST_INDEX),
+        ObjectSet::Builtin(first) => builtin(*first),
         ObjectSet::Real => {
             let mut found: Vec<(String, String)> = REAL_MESHES
                 .iter()
@@ -263,11 +274,19 @@ mod tests {
             "folder:/tmp/x".parse(),
             Ok(ObjectSet::Folder(PathBuf::from("/tmp/x")))
         );
+        assert_eq!("builtin:60".parse(), Ok(ObjectSet::Builtin(60)));
+        assert_eq!(ObjectSet::Builtin(60).name(), "builtin:60");
         let wrong = "heldout".parse::<ObjectSet>().unwrap_err();
         assert!(
-            wrong.contains("held-out, dev, real, dev-real or folder:PATH"),
+            wrong.contains(
+                "held-out, dev, real, dev-real, builtin:N (the first index) or folder:PATH"
+            ),
             "{wrong}"
         );
+        assert!("builtin:sixty".parse::<ObjectSet>().is_err());
+        let set = objects(&ObjectSet::Builtin(60), 2, Path::new("/nonexistent")).unwrap();
+        assert_eq!(set.len(), 2 * Category::ALL.len());
+        assert_eq!(set[1].name, format!("{}_061", Category::ALL[0].name()));
     }
 
     #[test]

@@ -1,16 +1,16 @@
 """Fits the multi-view planner's ranker (``crates/planner/src/ranker.rs``): a logistic model of
 the chance that a re-scored candidate holds in physics, from the physics trials of the planner's
-own candidates (``plan_eval --dump-rescored``).
+own candidates (``cargo run --release --bin ranker_data``, ``mvgrasp::ranker_data``).
 
-    cargo run --release --example plan_eval -- --per-category 10 --first-index 60 \\
-        --data /nonexistent --policy fused-5 --dump-rescored ../datasets/ranker/fit.jsonl
-    python training/scripts/fit_ranker.py ../datasets/ranker/fit.jsonl \\
-        --validate ../datasets/ranker/dev.jsonl --out models/ranker_fused.json
+    cargo run --release --bin ranker_data -- --out ../datasets/ranker/fit --set builtin:60 \\
+        --per-category 10
+    python training/scripts/fit_ranker.py ../datasets/ranker/fit/rescored.jsonl \\
+        --validate ../datasets/ranker/dev/rescored.jsonl --out models/ranker_fused.json
 
 Each line of a dump is one candidate: its re-score (``quality``, or ``virtual_quality`` where the
 dump was made with a ranker), the proposing network's score (``view_quality``), the approach's
 tilt, who proposed it, its width, its height and the trial's outcome. Trials whose object
-toppled while settling test the pose, not the grasp, and are left out, as ``plan_eval`` leaves
+toppled while settling test the pose, not the grasp, and are left out, as the evaluation leaves
 them out. The features are the Rust ranker's, computed the same way (``features`` below and
 ``Ranker::features``); their names are written beside the weights and checked on loading.
 
@@ -166,7 +166,7 @@ def code_commit() -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("data", type=Path, nargs="+", help="plan_eval --dump-rescored files")
+    parser.add_argument("data", type=Path, nargs="+", help="ranker_data's rescored.jsonl files")
     parser.add_argument("--validate", type=Path, help="a dump of other objects to report on")
     parser.add_argument("--l2", type=float, default=1.0, help="L2 penalty (default 1)")
     parser.add_argument("--out", type=Path, required=True, help="the ranker file to write")

@@ -138,22 +138,21 @@ if [[ $quick != 1 ]]; then
     ranker_out=models/ranker_fused.json
 fi
 
-# The fused planner's ranker: the planner (with the networks now compiled into plan_eval) on
+# The fused planner's ranker: the planner (with the networks now compiled into ranker_data) on
 # built-in objects 60 to 69 of each category (past every training and evaluation index), every
 # re-scored candidate tried in physics, and a logistic model of the outcome fitted to them; the
-# development set (objects 50 to 54) is dumped the same way and reported beside the fit. About
-# ten minutes here.
-cargo build --release --quiet --example plan_eval
+# development set (objects 50 to 54) is made the same way and reported beside the fit. About
+# ten minutes here; an interrupted run keeps its finished objects.
+cargo build --release --quiet --bin ranker_data
 mkdir -p "$data/ranker"
-for set in "fit 60 $((per_category / 2))" "dev 50 $((per_category / 4))"; do
-    read -r name first count <<< "$set"
+for set in "fit builtin:60 $((per_category / 2))" "dev dev $((per_category / 4))"; do
+    read -r name objects count <<< "$set"
     (( count >= 1 )) || count=1
-    target/release/examples/plan_eval --per-category "$count" --first-index "$first" \
-        --data /nonexistent --policy fused-5 --no-ranker \
-        --dump-rescored "$data/ranker/$name.jsonl" > "$runs/ranker_$name.log"
+    target/release/ranker_data --out "$data/ranker/$name" --set "$objects" \
+        --per-category "$count" > "$runs/ranker_$name.log" 2>&1
 done
-"$python" training/scripts/fit_ranker.py "$data/ranker/fit.jsonl" \
-    --validate "$data/ranker/dev.jsonl" --out "$ranker_out"
+"$python" training/scripts/fit_ranker.py "$data/ranker/fit/rescored.jsonl" \
+    --validate "$data/ranker/dev/rescored.jsonl" --out "$ranker_out"
 
 # The chance to hold (training/scripts/fit_probability.py), a logistic map of each planner's
 # quality to the trial's outcome, every resting pose, seeds 0 to 2, with the networks and the
