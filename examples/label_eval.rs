@@ -1,6 +1,7 @@
 //! The labels against the physics outcome they are meant to predict (the issue on grasps that
-//! hold): on held-out objects (built-in objects past every training index, and the graspable
-//! real meshes of ../shared/data), antipodal grasps are sampled on each object at rest and
+//! hold): on the evaluation's object sets (`--set`, as `evaluate --set`; default the built-in
+//! objects past every training index and every real mesh of ../shared/data, the object names
+//! the evaluation gives them), antipodal grasps are sampled on each object at rest and
 //! labelled three ways: Dex-Net 2.0's robust Ferrari-Canny label; the physics label (the share
 //! of K perturbed rapier trials that hold, at least a half; the grasp datasets' label); and both
 //! together. Each is compared with a high-K physics outcome drawn independently (other seeds,
@@ -9,8 +10,9 @@
 //! are left out of both rates.
 //!
 //! ```text
-//! cargo run --release --example label_eval -- [--per-category 5] [--n 20] [--k 10]
-//!     [--outcome-k 50] [--data ../shared/data/meshes] [--json OUT.json] [--replay DIR]
+//! cargo run --release --example label_eval -- [--set held-out --set real] [--per-category 5]
+//!     [--max-meshes 0] [--n 20] [--k 10] [--outcome-k 50] [--data ../shared/data/meshes]
+//!     [--json OUT.json] [--replay DIR]
 //! ```
 //!
 //! `--replay DIR` also writes what another physics engine needs to replay every grasp's
@@ -20,21 +22,20 @@
 //! `DIR/meshes/NAME.obj` (the mesh, object frame) and `DIR/meshes/NAME.parts.obj` (the convex
 //! parts the trial collides with, one `o` group a part, object frame).
 //!
-//! Reports, per category and overall, each label's confusion table against the outcome, its
+//! Reports, per category or source and overall, each label's confusion table against the outcome, its
 //! false-positive rate (outcome failed, label positive, over outcome failed) and the share of
 //! its positives that failed.
 
 mod common;
 
-use common::{EvalArgs, REAL_MESHES, Rested, analyse_at_rest};
+use common::{EvalArgs, Loaded, Rested, SetArgs, analyse_at_rest, load_sets};
 use std::process::ExitCode;
 use std::time::Instant;
 
 use clap::Parser;
 use mvgrasp::cli::CliResult;
 use mvgrasp::evaluate::labels::{Confusion, LabelRecord, LabelSuite};
-use mvgrasp::geometry::objects::{Category, generate};
-use mvgrasp::geometry::{TriangleMesh, load_mesh};
+use mvgrasp::geometry::TriangleMesh;
 use mvgrasp::grasp::Gripper;
 use mvgrasp::grasp::physics::{
     PhysicsNoise, PhysicsObject, PhysicsOutcome, PhysicsParams, StageCounts,
@@ -45,10 +46,8 @@ use serde::Serialize;
 #[derive(Parser, Debug)]
 #[command(about)]
 struct Args {
-    /// Built-in objects per category, from index 30 (the training sets use 0 to 19, the
-    /// validation sets 20 to 29).
-    #[arg(long, default_value_t = 5)]
-    per_category: u32,
+    #[command(flatten)]
+    objects: SetArgs,
     /// Grasps sampled per object.
     #[arg(long, default_value_t = 20)]
     n: usize,
@@ -201,21 +200,7 @@ fn main() -> ExitCode {
 }
 
 fn run(args: &Args) -> CliResult<()> {
-    let mut objects: Vec<(String, String, TriangleMesh)> = Vec::new();
-    for category in Category::ALL {
-        for index in 30..30 + args.per_category {
-            let o = generate(category, index, 0)?;
-            objects.push((category.name().to_string(), o.name, o.mesh));
-        }
-    }
-    for m in &REAL_MESHES[2..11] {
-        let path = args.eval.data.join(m);
-        if path.is_file() {
-            let mesh = load_mesh(&path)?;
-            let name = m.rsplit('/').next().unwrap_or(m).to_string();
-            objects.push(("real".into(), name, mesh));
-        }
-    }
+    let objects = load_sets(&args.objects, &args.eval.data)?;
     let suite = LabelSuite {
         grasps: args.n,
         trials: args.k,
@@ -239,7 +224,7 @@ fn run(args: &Args) -> CliResult<()> {
         let meshes = dir.join("meshes");
         std::fs::create_dir_all(&meshes).map_err(|e| format!("{}: {e}", meshes.display()))?;
     }
-    for (group, name, mesh) in &objects {
+    for Loaded { group, name, mesh } in &objects {
         let Some(Rested {
             table_from_object,
             object,
@@ -302,8 +287,13 @@ fn run(args: &Args) -> CliResult<()> {
             started.elapsed().as_secs_f64()
         );
     }
-    let mut groups: Vec<String> = Category::ALL.iter().map(|c| c.name().to_string()).collect();
-    groups.push("real".into());
+    // The objects' groups in their order, then all of them.
+    let mut groups: Vec<String> = Vec::new();
+    for o in &objects {
+        if !groups.contains(&o.group) {
+            groups.push(o.group.clone());
+        }
+    }
     groups.push("all".into());
     println!(
         "{} objects, {} grasps; physics label: K = {} perturbed trials, held when at least half \

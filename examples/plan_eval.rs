@@ -1,10 +1,14 @@
-//! The planner end to end, checked in physics: for objects the networks never saw (built-in
-//! objects past the training set's 20 per category, and the real meshes of ../shared/data when
-//! it is there), each policy plans one grasp from rendered depth, and the grasp is checked
-//! with the dataset's analytic label and a rapier trial (close, lift, shake).
+//! The planner's ablations, checked in physics: for the evaluation's object sets (`--set`, as
+//! `evaluate --set`; default the built-in objects past every training index and every real
+//! mesh of ../shared/data), each policy plans one grasp in the object's most probable pose,
+//! and the grasp is checked with the dataset's analytic label and a rapier trial (close,
+//! lift, shake). `evaluate` measures the shipped planners; this program measures the settings
+//! beside them (the seed paper's per-view policy, other view counts, cameras, crops, the
+//! trial's shapes, the re-scoring's knobs, a candidate network's export).
 //!
 //! ```text
-//! cargo run --release --example plan_eval -- [--per-category 2] [--data ../shared/data/meshes]
+//! cargo run --release --example plan_eval -- [--set held-out --set real] [--per-category 5]
+//!     [--max-meshes 0] [--data ../shared/data/meshes]
 //!     [--camera phoxi_s|primesense|realsense_d435] [--top-down-only] [--shell] [--grip-surface] [--top10]
 //!     [--gqcnn EXPORT.json] [--mvgqcnn EXPORT.json]
 //! ```
@@ -27,16 +31,14 @@
 
 mod common;
 
-use common::{REAL_MESHES, wilson_95};
+use common::{Loaded, SetArgs, load_sets, wilson_95};
 use mvgrasp::cli::CliResult;
-use mvgrasp::evaluate::objects::{ObjectSet, objects as real_objects};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Parser;
-use mvgrasp::geometry::objects::{Category, generate};
-use mvgrasp::geometry::{Intrinsics, IntrinsicsPreset, TriangleMesh, load_mesh};
+use mvgrasp::geometry::{Intrinsics, IntrinsicsPreset};
 use mvgrasp::grasp::GraspObject;
 use mvgrasp::grasp::physics::FailureStage;
 use mvgrasp::infer::Gqcnn;
@@ -51,17 +53,11 @@ use mvgrasp_planner::{Ranker, tilt_rad};
 #[derive(Parser, Debug)]
 #[command(about)]
 struct Args {
-    /// Built-in objects per category (indices 30, 31, ...: never in the training set).
-    #[arg(long, default_value_t = 2)]
-    per_category: u32,
-    /// The shared mesh folder (skipped when absent).
+    #[command(flatten)]
+    objects: SetArgs,
+    /// The shared mesh folder (the real sets are empty when it is absent).
     #[arg(long, default_value = "../shared/data/meshes")]
     data: PathBuf,
-    /// Every real mesh of the shared folder (`evaluate --set real`'s: the two YCB boxes and
-    /// the mug URDF too, the YCB bowl and plate, ... and the 40 household objects of
-    /// `household/manifest.json`).
-    #[arg(long)]
-    every_real_mesh: bool,
     /// Distance of the multi-view policies' cameras, metres (`plan`'s: 0.65; the paper's test
     /// views: 0.5).
     #[arg(long, default_value_t = 0.65)]
@@ -109,10 +105,6 @@ struct Args {
     /// given.
     #[arg(long = "policy")]
     policies: Vec<String>,
-    /// The first built-in object index of each category (30: the report set; 50: the
-    /// development set the fused planner's settings were chosen on).
-    #[arg(long, default_value_t = 30)]
-    first_index: u32,
     /// The network that re-scores the fused policies' best candidates on virtual views:
     /// gqcnn (the top-down GQ-CNN), mvgqcnn, or none (rank by the multi-view GQ-CNN's score
     /// on the view the candidate came from).
@@ -288,7 +280,7 @@ struct Tally {
     /// With --top10: per object, the share of its top choices (up to 10) that held.
     top10: Vec<f64>,
     /// Per category (the real meshes as one).
-    by_group: BTreeMap<&'static str, Group>,
+    by_group: BTreeMap<String, Group>,
     /// (held, tried) by the chosen approach's tilt from straight down ([`TILT_BINS_DEG`]).
     by_tilt: [(usize, usize); 3],
 }
@@ -298,36 +290,7 @@ fn main() -> ExitCode {
 }
 
 fn run(args: &Args) -> CliResult<()> {
-    // (name, group, mesh): the group is the category, or "real meshes".
-    let mut objects: Vec<(String, &'static str, TriangleMesh)> = Vec::new();
-    for category in Category::ALL {
-        for index in args.first_index..args.first_index + args.per_category {
-            let o = generate(category, index, 0)?;
-            objects.push((o.name, category.name(), o.mesh));
-        }
-    }
-    // By default the two YCB boxes are left out (no Panda grasp, see REAL_MESHES) and the
-    // pybullet mug's URDF (its handle filled by the physics hull) to grasp_eval;
-    // --every-real-mesh takes every real mesh (`evaluate --set real`'s).
-    let real: Vec<String> = if args.every_real_mesh {
-        real_objects(&ObjectSet::Real, 0, &args.data)?
-            .into_iter()
-            .map(|o| o.name)
-            .collect()
-    } else {
-        REAL_MESHES[2..11]
-            .iter()
-            .map(|m| (*m).to_string())
-            .collect()
-    };
-    for m in &real {
-        let path = args.data.join(m);
-        if path.is_file() {
-            let mesh = load_mesh(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-            let name = m.rsplit('/').next().unwrap_or(m).to_string();
-            objects.push((name, "real meshes", mesh));
-        }
-    }
+    let objects = load_sets(&args.objects, &args.data)?;
     let preset: IntrinsicsPreset = args.camera.parse().map_err(|e| format!("--camera: {e}"))?;
     let renderer = Renderer::new(Backend::Auto)?;
     let policies = policies(args)?;
@@ -443,7 +406,7 @@ fn run(args: &Args) -> CliResult<()> {
     println!(
         "object                         policy                 quality  free  robust  physics"
     );
-    for (name, group, mesh) in &objects {
+    for Loaded { group, name, mesh } in &objects {
         // For --top10's checks (plan_grasp prepares its own for the best grasp).
         let object = args
             .top10
@@ -478,7 +441,7 @@ fn run(args: &Args) -> CliResult<()> {
             tally.free += usize::from(free);
             tally.tried += usize::from(settled);
             tally.held += usize::from(held);
-            let in_group = tally.by_group.entry(group).or_default();
+            let in_group = tally.by_group.entry(group.clone()).or_default();
             in_group.planned += 1;
             in_group.quality += f64::from(best.quality);
             in_group.held += usize::from(held);

@@ -1,12 +1,70 @@
 //! What the evaluation examples share.
 
-/// The real meshes of the evaluations, paths under `../shared/data/meshes` (all in metres;
-/// the first two lie flat wider than the hand opens).
-#[allow(unused_imports)] // each example compiles this module; not every one takes these
-pub use mvgrasp::evaluate::objects::REAL_MESHES;
 /// The Wilson score interval at 95% confidence.
 #[allow(unused_imports)] // each example compiles this module; not every one takes these
 pub use mvgrasp::evaluate::report::wilson_95;
+
+/// The objects an example works on: the evaluation's object sets, by name (`evaluate --set`).
+#[derive(clap::Args, Debug)]
+#[allow(dead_code)] // each example compiles this module; not every one takes these options
+pub struct SetArgs {
+    /// An object set (repeat), as `evaluate --set` names them: held-out (built-in objects past
+    /// every training index), dev, builtin:N (built-in objects from index N), real (every real
+    /// mesh of the shared folder), dev-real, or folder:PATH. Default: held-out and real.
+    #[arg(long = "set")]
+    pub sets: Vec<String>,
+    /// Built-in objects per category in the built-in sets.
+    #[arg(long, default_value_t = 5)]
+    pub per_category: u32,
+    /// At most this many meshes of each file set (0: all).
+    #[arg(long, default_value_t = 0)]
+    pub max_meshes: usize,
+}
+
+/// An object of the sets, loaded: its group (the category, or the real mesh's source or
+/// household category), its name in its set, and its mesh.
+#[allow(dead_code)] // see SetArgs
+pub struct Loaded {
+    pub group: String,
+    pub name: String,
+    pub mesh: mvgrasp::geometry::TriangleMesh,
+}
+
+/// The objects of `args`' sets under the shared mesh folder `data`, each loaded; a mesh that
+/// cannot be read is skipped with a note on standard error.
+///
+/// # Errors
+/// A name that is not a set, or a manifest or folder that cannot be read.
+#[allow(dead_code)] // see SetArgs
+pub fn load_sets(args: &SetArgs, data: &std::path::Path) -> Result<Vec<Loaded>, String> {
+    let names = if args.sets.is_empty() {
+        vec!["held-out".to_string(), "real".to_string()]
+    } else {
+        args.sets.clone()
+    };
+    let found = mvgrasp::evaluate::objects::objects_of_sets(
+        &names,
+        args.per_category,
+        data,
+        args.max_meshes,
+    )
+    .map_err(|e| match e {
+        mvgrasp::Error::Evaluate { problem } => format!("--{problem}"),
+        e => e.to_string(),
+    })?;
+    let mut loaded = Vec::new();
+    for object in found {
+        match object.load() {
+            Ok(mesh) => loaded.push(Loaded {
+                group: object.group.clone(),
+                name: object.name.clone(),
+                mesh,
+            }),
+            Err(e) => eprintln!("skipping {}: {e}", object.name),
+        }
+    }
+    Ok(loaded)
+}
 
 /// The options of the label evaluation (`label_eval`).
 #[derive(clap::Args, Debug)]

@@ -20,7 +20,7 @@ use std::process::ExitCode;
 use clap::Parser;
 use mvgrasp::cli::CliResult;
 use mvgrasp::evaluate::journal::Journal;
-use mvgrasp::evaluate::objects::{ObjectSet, objects};
+use mvgrasp::evaluate::objects::objects_of_sets;
 use mvgrasp::ranker_data::{RankerData, RankerSample};
 use mvgrasp::render::{Backend, Renderer};
 
@@ -59,20 +59,12 @@ fn run(args: &Args) -> CliResult<()> {
     } else {
         args.sets.clone()
     };
-    let mut found = Vec::new();
-    for name in &names {
-        let set: ObjectSet = name.parse().map_err(|e| format!("--set {e}"))?;
-        let mut of_set = objects(&set, args.per_category, &args.data)?;
-        if args.max_meshes > 0
-            && !matches!(
-                set,
-                ObjectSet::HeldOut | ObjectSet::Dev | ObjectSet::Builtin(_)
-            )
-        {
-            of_set.truncate(args.max_meshes);
-        }
-        found.extend(of_set);
-    }
+    let found = objects_of_sets(&names, args.per_category, &args.data, args.max_meshes).map_err(
+        |e| match e {
+            mvgrasp::Error::Evaluate { problem } => format!("--{problem}"),
+            e => e.to_string(),
+        },
+    )?;
     if found.is_empty() {
         return Err(format!(
             "no objects in {} (--data {})",

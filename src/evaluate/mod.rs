@@ -243,11 +243,11 @@ pub struct Results {
 /// network that cannot start, or a report that cannot be written.
 pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) -> Result<Results> {
     let invalid = |problem: String| Error::Evaluate { problem };
-    let sets: Vec<ObjectSet> = config
-        .sets
-        .iter()
-        .map(|s| s.parse().map_err(|e| invalid(format!("set {e}"))))
-        .collect::<Result<_>>()?;
+    // Every name checked before anything is written.
+    for set in &config.sets {
+        set.parse::<ObjectSet>()
+            .map_err(|e| invalid(format!("set {e}")))?;
+    }
     let policies: Vec<EvalPolicy> = config
         .policies
         .iter()
@@ -323,19 +323,12 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
     // Written only once the settings are known good: a refused run leaves no config behind.
     std::fs::create_dir_all(out).map_err(Error::io("create", out))?;
     check_config(config, out)?;
-    let mut objects: Vec<ObjectRef> = Vec::new();
-    for set in &sets {
-        let mut found = objects::objects(set, config.per_category, &config.data)?;
-        if config.max_meshes > 0
-            && !matches!(
-                set,
-                ObjectSet::HeldOut | ObjectSet::Dev | ObjectSet::Builtin(_)
-            )
-        {
-            found.truncate(config.max_meshes);
-        }
-        objects.extend(found);
-    }
+    let objects: Vec<ObjectRef> = objects::objects_of_sets(
+        &config.sets,
+        config.per_category,
+        &config.data,
+        config.max_meshes,
+    )?;
     let renderer = Renderer::new(mvgrasp_render::Backend::Auto)?;
     let run_grasps = config.suites.iter().any(|s| s == "grasps");
     let run_speed = config.suites.iter().any(|s| s == "speed");

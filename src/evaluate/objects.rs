@@ -97,6 +97,11 @@ impl std::str::FromStr for ObjectSet {
 }
 
 impl ObjectSet {
+    /// Whether it is a set of built-in objects (`held-out`, `dev`, `builtin:N`).
+    pub fn is_builtin(&self) -> bool {
+        matches!(self, Self::HeldOut | Self::Dev | Self::Builtin(_))
+    }
+
     /// Its name on the command line and in the report.
     pub fn name(&self) -> String {
         match self {
@@ -231,6 +236,31 @@ pub fn objects(set: &ObjectSet, per_category: u32, data: &Path) -> Result<Vec<Ob
                 .collect()
         }
     })
+}
+
+/// The objects of the sets named `names` (as `evaluate --set` names them), in order: of each
+/// built-in set `per_category` a category, of each file set at most `max_meshes` (0: all).
+///
+/// # Errors
+/// A name that is not a set (the message says what is expected), or [`objects`]'s.
+pub fn objects_of_sets(
+    names: &[String],
+    per_category: u32,
+    data: &Path,
+    max_meshes: usize,
+) -> Result<Vec<ObjectRef>> {
+    let mut found = Vec::new();
+    for name in names {
+        let set: ObjectSet = name.parse().map_err(|e| Error::Evaluate {
+            problem: format!("set {e}"),
+        })?;
+        let mut of_set = objects(&set, per_category, data)?;
+        if max_meshes > 0 && !set.is_builtin() {
+            of_set.truncate(max_meshes);
+        }
+        found.extend(of_set);
+    }
+    Ok(found)
 }
 
 /// The household set's mesh files under `data` with their categories, from
