@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use mvgrasp::evaluate::{EvalConfig, Progress, evaluate};
+use mvgrasp::evaluate::{EvalConfig, Progress, RunOptions, Shard, evaluate, evaluate_with};
 use mvgrasp::geometry::objects::{Category, generate};
 use mvgrasp::geometry::write_obj;
 
@@ -390,4 +390,50 @@ fn the_depth_suite_scores_every_method_and_tallies_the_confidence_of_the_network
     assert_ne!(photographed.depth, results.depth);
     let report = std::fs::read_to_string(second.join("report.md")).unwrap();
     assert!(report.contains("the photographic look"), "{report}");
+}
+
+#[test]
+fn objects_shared_by_threads_or_machines_give_the_same_bytes_as_one_after_the_other() {
+    if crate::common::renderer().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let config = EvalConfig {
+        suites: vec!["grasps".into(), "depth".into()],
+        seeds: vec![0],
+        coverage: false,
+        depth_views: vec![2],
+        ..two_objects(dir.path())
+    };
+    let one = dir.path().join("one");
+    let results = evaluate(&config, &one, &mut Quiet).unwrap();
+    assert_eq!(
+        (results.objects.len(), results.depth.len()),
+        (2, 2),
+        "{:?}",
+        results.skipped
+    );
+    let three = dir.path().join("three");
+    let jobs = |jobs, shard| RunOptions { jobs, shard };
+    evaluate_with(&config, &three, &mut Quiet, jobs(3, None)).unwrap();
+    assert_eq!(files(&three), files(&one));
+
+    // Spread over two machines sharing the folder: each shard records its half and writes no
+    // report; the run without a shard takes both halves and writes the same bytes.
+    let spread = dir.path().join("spread");
+    for index in 0..2 {
+        let shard = Shard { index, count: 2 };
+        let part = evaluate_with(&config, &spread, &mut Quiet, jobs(1, Some(shard))).unwrap();
+        assert_eq!(part.depth.len(), 1, "{:?}", part.skipped);
+        assert!(!spread.join("report.md").exists());
+        assert!(spread.join(format!("shards/{index}-of-2.jsonl")).is_file());
+    }
+    evaluate_with(&config, &spread, &mut Quiet, jobs(1, None)).unwrap();
+    // Nothing was left to do: the folder's own journal stayed empty.
+    assert_eq!(
+        std::fs::read_to_string(spread.join("records.jsonl")).unwrap(),
+        ""
+    );
+    assert_eq!(files(&spread), files(&one));
+    assert!("2/2".parse::<Shard>().is_err() && "1/2".parse::<Shard>().is_ok());
 }

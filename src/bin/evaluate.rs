@@ -19,7 +19,7 @@ use clap::Parser;
 use indicatif::{ProgressBar, ProgressStyle};
 use mvgrasp::cli::CliResult;
 use mvgrasp::evaluate::grasps::POLICIES;
-use mvgrasp::evaluate::{EvalConfig, Lines, Progress, evaluate};
+use mvgrasp::evaluate::{EvalConfig, Lines, Progress, RunOptions, Shard, evaluate_with};
 
 /// Evaluate the planners on held-out and real objects, checked in the project's trial, and
 /// write a report folder.
@@ -127,6 +127,17 @@ struct Args {
     /// The speed suite's timed plans per policy (default 5; --full: 15).
     #[arg(long)]
     speed_runs: Option<usize>,
+    /// Objects evaluated at once, each on its own thread (the records and the report are the
+    /// same whatever the number; the planner's own stages use every core either way).
+    #[arg(long, default_value_t = 1)]
+    jobs: usize,
+    /// Run only shard K of N (K/N, from 0) of the objects and clutter rounds, for a run spread
+    /// over machines that share the report folder: each appends its records to
+    /// OUT/shards/K-of-N.jsonl and writes no report; the same command without --shard then
+    /// takes every shard's records and writes the report (scripts/evaluate_ray.py does this on
+    /// a Ray cluster).
+    #[arg(long)]
+    shard: Option<Shard>,
     /// Plain progress lines even on a terminal.
     #[arg(long)]
     plain: bool,
@@ -247,7 +258,28 @@ fn run(args: &Args) -> CliResult<()> {
     } else {
         Box::new(Lines)
     };
-    let results = evaluate(&config, &args.out, progress.as_mut())?;
+    if args.jobs == 0 {
+        return Err("--jobs 0: expected at least 1".into());
+    }
+    let run = RunOptions {
+        jobs: args.jobs,
+        shard: args.shard,
+    };
+    let results = evaluate_with(&config, &args.out, progress.as_mut(), run)?;
+    if let Some(shard) = args.shard {
+        println!(
+            "shard {} of {}: {} plans, {} depth records, {} clutter rounds, {} labelled grasps \
+             recorded in {}",
+            shard.index,
+            shard.count,
+            results.grasps.len(),
+            results.depth.len(),
+            results.clutter.len(),
+            results.labels.len(),
+            args.out.join("shards").display()
+        );
+        return Ok(());
+    }
     for (object, why) in &results.skipped {
         eprintln!("not evaluated: {object}: {why}");
     }

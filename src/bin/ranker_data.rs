@@ -74,7 +74,7 @@ fn run(args: &Args) -> CliResult<()> {
         .into());
     }
     std::fs::create_dir_all(&args.out).map_err(|e| format!("{}: {e}", args.out.display()))?;
-    let mut journal = Journal::open(&args.out.join("records.jsonl"))?;
+    let journal = Journal::open(&args.out.join("records.jsonl"))?;
     let renderer = Renderer::new(Backend::Auto)?;
     // The planner, made only when some object is missing.
     let mut data: Option<RankerData> = None;

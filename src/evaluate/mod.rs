@@ -242,6 +242,73 @@ pub struct Results {
 /// A folder holding another config's records, unknown set or policy names, a renderer or
 /// network that cannot start, or a report that cannot be written.
 pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) -> Result<Results> {
+    evaluate_with(config, out, progress, RunOptions::default())
+}
+
+/// How a run spreads its work.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RunOptions {
+    /// Objects evaluated at once on this machine, each on its own thread (0 and 1: one).
+    pub jobs: usize,
+    /// This run is one shard of a run spread over machines.
+    pub shard: Option<Shard>,
+}
+
+/// One of `count` shards of a run: the objects (and clutter rounds) whose place in the work's
+/// order leaves `index` over `count`. Each shard appends its records to its own journal in
+/// the report folder (`shards/K-of-N.jsonl`, on a filesystem the machines share) and writes no
+/// report; a run without a shard reads every shard's records, does what is missing (and the
+/// speed suite) and writes the report: the same bytes as one machine's run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    /// This shard, from 0.
+    pub index: usize,
+    /// How many shards there are.
+    pub count: usize,
+}
+
+impl std::str::FromStr for Shard {
+    type Err = String;
+
+    fn from_str(text: &str) -> std::result::Result<Self, String> {
+        let parsed = text
+            .split_once('/')
+            .and_then(|(k, n)| Some((k.parse().ok()?, n.parse().ok()?)));
+        match parsed {
+            Some((index, count)) if index < count => Ok(Self { index, count }),
+            _ => Err(format!(
+                "{text:?}: expected K/N, shard K of N counted from 0 (0/2 and 1/2)"
+            )),
+        }
+    }
+}
+
+impl Shard {
+    /// Whether the `i`-th piece of work is this shard's.
+    fn takes(&self, i: usize) -> bool {
+        i % self.count == self.index
+    }
+
+    /// Its journal's path in the report folder `out`.
+    fn journal(&self, out: &Path) -> PathBuf {
+        out.join("shards")
+            .join(format!("{}-of-{}.jsonl", self.index, self.count))
+    }
+}
+
+/// [`evaluate`] spread as `run` says: the same records and report whatever the number of jobs
+/// or shards (each object's pieces are its own; the records' lines come in the order they
+/// finish). A shard's run returns its own results and writes no report.
+///
+/// # Errors
+/// As [`evaluate`].
+pub fn evaluate_with(
+    config: &EvalConfig,
+    out: &Path,
+    progress: &mut dyn Progress,
+    run: RunOptions,
+) -> Result<Results> {
+    let jobs = run.jobs;
     let invalid = |problem: String| Error::Evaluate { problem };
     // Every name checked before anything is written.
     for set in &config.sets {
@@ -331,7 +398,8 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
     )?;
     let renderer = Renderer::new(mvgrasp_render::Backend::Auto)?;
     let run_grasps = config.suites.iter().any(|s| s == "grasps");
-    let run_speed = config.suites.iter().any(|s| s == "speed");
+    // The speed suite times one machine: the run that writes the report.
+    let run_speed = config.suites.iter().any(|s| s == "speed") && run.shard.is_none();
     // The policies' networks, loaded only for the grasp and speed suites.
     let ready: Vec<ReadyPolicy> = if run_grasps || run_speed {
         policies
@@ -341,7 +409,27 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
     } else {
         Vec::new()
     };
-    let mut journal = Journal::open(&out.join("records.jsonl"))?;
+    // The shards' journals, read beside this run's own.
+    let shards = out.join("shards");
+    let mut others: Vec<PathBuf> = match std::fs::read_dir(&shards) {
+        Ok(entries) => entries
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|e| e == "jsonl"))
+            .collect(),
+        Err(_) => Vec::new(),
+    };
+    others.sort();
+    let own = match run.shard {
+        Some(shard) => {
+            std::fs::create_dir_all(&shards).map_err(Error::io("create", &shards))?;
+            others.push(out.join("records.jsonl"));
+            shard.journal(out)
+        }
+        None => out.join("records.jsonl"),
+    };
+    others.retain(|p| *p != own);
+    let journal = Journal::open_with(&own, &others)?;
+    let mine = |i: usize| run.shard.is_none_or(|s| s.takes(i));
     let pictures = out.join("pictures");
     std::fs::create_dir_all(&pictures).map_err(Error::io("create", &pictures))?;
     let mut results = Results {
@@ -409,26 +497,35 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
         depth_setting.push_str("photo|");
     }
     let per_object = run_grasps || depth_suite.is_some() || label_suite.is_some();
-    let total = if per_object { objects.len() } else { 0 } + rounds.len() + usize::from(run_speed);
-    for (done, object) in objects.iter().enumerate().filter(|_| per_object) {
+    // This run's share of the objects and rounds (the clutter rounds draw from all objects).
+    let my_objects: Vec<&ObjectRef> = objects
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| mine(*i))
+        .map(|(_, o)| o)
+        .collect();
+    let rounds: Vec<_> = rounds
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| mine(*i))
+        .map(|(_, r)| r)
+        .collect();
+    let total =
+        if per_object { my_objects.len() } else { 0 } + rounds.len() + usize::from(run_speed);
+    // One object's pieces of every per-object suite, or why it could not be evaluated.
+    let one = |object: &&ObjectRef| -> ObjectDone {
         let id = format!("{}|{}", object.set, object.name);
+        let mut done = ObjectDone::default();
         let mut work = || -> Result<()> {
             if run_grasps {
-                let (placed, records) = evaluate_object(
-                    object,
-                    &id,
-                    config,
-                    &ready,
-                    &renderer,
-                    &mut journal,
-                    &pictures,
-                )?;
-                results.objects.extend(placed);
-                results.grasps.extend(records);
+                let (placed, records) =
+                    evaluate_object(object, &id, config, &ready, &renderer, &journal, &pictures)?;
+                done.placed = placed;
+                done.grasps = records;
             }
             if let Some(suite) = &depth_suite {
                 let key = format!("depth|{depth_setting}{id}");
-                let records: Vec<depth::DepthRecord> = match journal.get(&key)? {
+                done.depth = match journal.get(&key)? {
                     Some(records) => records,
                     None => {
                         let mesh = object.load()?;
@@ -442,7 +539,6 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
                         journal.put(&key, &records)?
                     }
                 };
-                results.depth.extend(records);
             }
             if let Some(suite) = &label_suite {
                 // The key names the settings and the seed, so that records copied into a run
@@ -451,7 +547,7 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
                     "labels|{}x{}x{}|{}|{id}",
                     suite.grasps, suite.trials, suite.outcome_trials, config.seeds[0]
                 );
-                let records: Vec<labels::LabelRecord> = match journal.get(&key)? {
+                done.labels = match journal.get(&key)? {
                     Some(records) => records,
                     None => {
                         let records = suite.run(
@@ -462,7 +558,6 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
                         journal.put(&key, &records)?
                     }
                 };
-                results.labels.extend(records);
             }
             Ok(())
         };
@@ -472,10 +567,22 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
                 Error::Evaluate { problem } => problem,
                 e => e.to_string(),
             };
-            results.skipped.push((id, why));
+            done.skipped = Some((id, why));
         }
-        progress.step(done + 1, total, &format!("{} {}", object.set, object.name));
-    }
+        done
+    };
+    let to_do: &[&ObjectRef] = if per_object { &my_objects } else { &[] };
+    // The objects on `jobs` threads, their records taken in the objects' order: the same
+    // results whatever the number of jobs.
+    in_order(to_do, jobs, one, |i, done| {
+        results.objects.extend(done.placed);
+        results.grasps.extend(done.grasps);
+        results.depth.extend(done.depth);
+        results.labels.extend(done.labels);
+        results.skipped.extend(done.skipped);
+        let object = &to_do[i];
+        progress.step(i + 1, total, &format!("{} {}", object.set, object.name));
+    });
     // The clutter suite's planners and objects, built only when a round is missing.
     let mut suite: Option<clutter::ClutterSuite> = None;
     let before = total - rounds.len();
@@ -531,7 +638,7 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
     }
     if run_speed {
         let key = format!("speed|{}", config.speed_runs);
-        let mut work = || -> Result<speed::SpeedRecord> {
+        let work = || -> Result<speed::SpeedRecord> {
             if let Some(record) = journal.get(&key)? {
                 return Ok(record);
             }
@@ -547,7 +654,9 @@ pub fn evaluate(config: &EvalConfig, out: &Path, progress: &mut dyn Progress) ->
         }
         progress.step(total, total, &key);
     }
-    report::write(&results, out)?;
+    if run.shard.is_none() {
+        report::write(&results, out)?;
+    }
     Ok(results)
 }
 
@@ -582,7 +691,7 @@ fn evaluate_object(
     config: &EvalConfig,
     ready: &[ReadyPolicy],
     renderer: &Renderer,
-    journal: &mut Journal,
+    journal: &Journal,
     pictures: &Path,
 ) -> Result<(Vec<PlacedObject>, Vec<GraspRecord>)> {
     // Loaded only when some piece of work is missing.
@@ -679,4 +788,58 @@ fn load<'a>(object: &ObjectRef, loaded: &'a mut Option<GraspObject>) -> Result<&
         return Ok(loaded);
     }
     Ok(loaded.insert(GraspObject::new(object.load()?)?))
+}
+
+/// One object's records of the per-object suites, or why it was skipped.
+#[derive(Default)]
+struct ObjectDone {
+    placed: Vec<PlacedObject>,
+    grasps: Vec<GraspRecord>,
+    depth: Vec<depth::DepthRecord>,
+    labels: Vec<labels::LabelRecord>,
+    skipped: Option<(String, String)>,
+}
+
+/// Runs `work` on each of `items` on `jobs` threads and hands each result to `take`, on this
+/// thread and in the items' order, as soon as it and those before it are done.
+fn in_order<T: Sync, R: Send>(
+    items: &[T],
+    jobs: usize,
+    work: impl Fn(&T) -> R + Sync,
+    mut take: impl FnMut(usize, R),
+) {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    if jobs <= 1 || items.len() <= 1 {
+        for (i, item) in items.iter().enumerate() {
+            take(i, work(item));
+        }
+        return;
+    }
+    let next = AtomicUsize::new(0);
+    let (sender, receiver) = std::sync::mpsc::channel();
+    std::thread::scope(|scope| {
+        for _ in 0..jobs.min(items.len()) {
+            let (sender, next, work) = (sender.clone(), &next, &work);
+            scope.spawn(move || {
+                loop {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(item) = items.get(i) else { break };
+                    if sender.send((i, work(item))).is_err() {
+                        break;
+                    }
+                }
+            });
+        }
+        drop(sender);
+        // Results that came before an earlier one, held until it comes.
+        let mut waiting = std::collections::BTreeMap::new();
+        let mut due = 0;
+        for (i, result) in receiver {
+            waiting.insert(i, result);
+            while let Some(result) = waiting.remove(&due) {
+                take(due, result);
+                due += 1;
+            }
+        }
+    });
 }
