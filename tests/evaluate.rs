@@ -376,6 +376,17 @@ fn the_depth_suite_scores_every_method_and_tallies_the_confidence_of_the_network
         report.contains("| refined | 2 |") && report.contains("Reliability"),
         "{report}"
     );
+    // The first object's error sheet, named in the report.
+    let sheets: Vec<String> = std::fs::read_dir(first.join("pictures"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with("depth_"))
+        .collect();
+    assert_eq!(sheets.len(), 1, "{sheets:?}");
+    assert!(
+        report.contains(&format!("(pictures/{})", sheets[0])),
+        "{report}"
+    );
 
     // The photographic look: records copied from the flat run are not taken for its own.
     let photo = EvalConfig {
@@ -436,4 +447,39 @@ fn objects_shared_by_threads_or_machines_give_the_same_bytes_as_one_after_the_ot
     );
     assert_eq!(files(&spread), files(&one));
     assert!("2/2".parse::<Shard>().is_err() && "1/2".parse::<Shard>().is_ok());
+}
+
+#[test]
+fn the_depth_suite_scores_real_photographs_against_the_sensors_depth() {
+    let Some(dir) = crate::shared_data::shared_data("real_rgb/apc_shelf_bin") else {
+        return;
+    };
+    let suite = mvgrasp::evaluate::depth::DepthSuite::new(0.5, false).unwrap();
+    let out = tempfile::tempdir().unwrap();
+    let sheet = out.path().join("sheet.png");
+    let records = suite
+        .run_photographs("apc_shelf_bin", &dir, &[1, 2], Some((&sheet, 2)))
+        .unwrap();
+    let views: Vec<usize> = records.iter().map(|r| r.views).collect();
+    assert_eq!(views, [1, 2]);
+    // One view: only the LSM takes one, and it cannot place its grid from a camera that does
+    // not look down; the record says so by holding no method.
+    assert!(records[0].methods.is_empty(), "{:?}", records[0].methods);
+    // The error sheet: 2 columns and 6 methods' at half the 640 x 480 views, 2 rows.
+    let decoder = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(&sheet).unwrap(),
+    ));
+    let info = decoder.read_info().unwrap().info().clone();
+    assert_eq!((info.width, info.height), (8 * 320, 2 * 240));
+    let two = &records[1];
+    assert_eq!(two.set, mvgrasp::evaluate::depth::REAL_PHOTOS);
+    let (_, first, all) = two.methods.iter().find(|(m, ..)| m == "sweep").unwrap();
+    // Two views' masked pixels with sensor depth, the first view's among them; the sweep
+    // confirms only some of them.
+    assert!(all.object_pixels > first.object_pixels && first.object_pixels > 1000);
+    assert!((0.01..0.99).contains(&all.predicted_share()), "{all:?}");
+    for (method, bins) in &two.reliability {
+        let (_, _, all) = two.methods.iter().find(|(m, ..)| m == method).unwrap();
+        assert_eq!(bins.iter().map(|b| b[0]).sum::<u64>(), all.object_pixels);
+    }
 }

@@ -13,6 +13,7 @@
 //! `hull` (the visual hull alone). The two networks that give a confidence (`mvs`, `refined`)
 //! are also tallied by it: per tenth of confidence, the object pixels and those within 5 mm.
 
+use std::path::Path;
 use std::sync::Arc;
 
 use mvgrasp_geometry::{HemisphereLayout, Intrinsics, IntrinsicsPreset};
@@ -30,6 +31,9 @@ use crate::sweep_refiner::{RefinedSweep, Unsure};
 
 /// The methods, in the report's order.
 pub const METHODS: [&str; 6] = ["lsm", "mvs", "refined", "sweep", "sweep-hull", "hull"];
+
+/// The set name of the depth records of real photographs.
+pub const REAL_PHOTOS: &str = "real photographs";
 
 /// Confidence bins of the reliability tally: tenths.
 pub const CONFIDENCE_BINS: usize = 10;
@@ -223,7 +227,7 @@ impl DepthSuite {
         (set, object): (&str, &str),
         mesh: &mvgrasp_geometry::TriangleMesh,
         views: &[usize],
-        seed: u64,
+        (seed, picture): (u64, Option<(&Path, usize)>),
     ) -> Result<Vec<DepthRecord>> {
         let rest = mvgrasp_geometry::RestingPoses::of(mesh)?;
         let (_, pose) = rest.get(0)?;
@@ -243,73 +247,241 @@ impl DepthSuite {
                 seed,
             )?
         };
-        let hull_fill = SweepParams {
-            hull_where_unconfirmed: true,
-            ..SweepParams::default()
-        };
+        let (inputs, truths): (Vec<RgbView>, Vec<Vec<f32>>) = rendered.into_iter().unzip();
         views
             .iter()
-            .map(|&n| {
-                let n = n.clamp(1, rendered.len());
-                let input: Vec<RgbView> = rendered[..n].iter().map(|(v, _)| v.clone()).collect();
-                // (method, each view's depth)
-                let mut predicted: Vec<(&str, Vec<Vec<f32>>)> =
-                    vec![("lsm", lsm_depths(&self.lsm, &input)?)];
-                let mut reliability = Vec::new();
-                if n >= 2 {
-                    let mvs: Vec<(Vec<f32>, Vec<f32>)> = mvs_depths(&self.mvs, &input, 0.0)?
-                        .into_iter()
-                        .map(|v| (v.depth_m, v.confidence))
-                        .collect();
-                    let refined: Vec<(Vec<f32>, Vec<f32>)> = self
-                        .refined
-                        .depths(&input)?
-                        .into_iter()
-                        .map(|v| (v.depth_m, v.confidence))
-                        .collect();
-                    for (method, views) in [("mvs", mvs), ("refined", refined)] {
-                        let mut bins = vec![[0u64; 2]; CONFIDENCE_BINS];
-                        for ((depth, confidence), (view, truth)) in views.iter().zip(&rendered) {
-                            let mask = view.mask.as_deref().unwrap_or(&[]);
-                            tally_confidence(&mut bins, (depth, confidence), truth, mask);
-                        }
-                        reliability.push((method.to_string(), bins));
-                        predicted.push((method, views.into_iter().map(|(d, _)| d).collect()));
-                    }
-                    let swept = sweep_depths(&input, &SweepParams::default())?;
-                    let filled = sweep_depths(&input, &hull_fill)?;
-                    predicted.push(("sweep", swept.iter().map(|s| s.depth_m.clone()).collect()));
-                    predicted.push((
-                        "sweep-hull",
-                        filled.into_iter().map(|s| s.depth_m).collect(),
-                    ));
-                    predicted.push(("hull", swept.into_iter().map(|s| s.hull_m).collect()));
-                }
-                let methods = predicted
-                    .into_iter()
-                    .map(|(method, depths)| {
-                        let (mut top, mut all) = (DepthErrors::default(), DepthErrors::default());
-                        for (i, (depth, (view, truth))) in depths.iter().zip(&rendered).enumerate()
-                        {
-                            let mask = view.mask.as_deref().unwrap_or(&[]);
-                            if i == 0 {
-                                top.add(depth, truth, mask);
-                            }
-                            all.add(depth, truth, mask);
-                        }
-                        (method.to_string(), top, all)
-                    })
-                    .collect();
-                Ok(DepthRecord {
-                    object: object.to_string(),
-                    set: set.to_string(),
-                    views: n,
-                    methods,
-                    reliability,
-                })
-            })
+            .map(|&n| self.score((set, object), &inputs, &truths, (n, picture)))
             .collect()
     }
+
+    /// The records of a folder of calibrated photographs with a depth sensor's images and
+    /// object masks (`plan --rgb`'s and `plan --views-dir`'s layout in one folder), named
+    /// `object` in the set [`REAL_PHOTOS`]: per number of `views` (at most the folder's), every
+    /// method against the sensor's depth over the masked pixels where the sensor has depth,
+    /// the folder's first view in the top-down view's place.
+    ///
+    /// # Errors
+    /// A folder that cannot be read (naming the file), views without masks, or a network
+    /// error.
+    pub fn run_photographs(
+        &self,
+        object: &str,
+        dir: &Path,
+        views: &[usize],
+        picture: Option<(&Path, usize)>,
+    ) -> Result<Vec<DepthRecord>> {
+        let inputs = crate::planner::read_rgb_dir(dir)?;
+        let sensor = crate::planner::read_views_dir(dir)?;
+        if inputs.iter().any(|v| v.mask.is_none()) {
+            return Err(crate::Error::Evaluate {
+                problem: format!("{}: the photographs need masks", dir.display()),
+            });
+        }
+        let truths: Vec<Vec<f32>> = sensor.iter().map(|v| v.depth.as_slice().to_vec()).collect();
+        let mut counts: Vec<usize> = views.iter().map(|&n| n.clamp(1, inputs.len())).collect();
+        counts.dedup();
+        counts
+            .into_iter()
+            .map(|n| self.score((REAL_PHOTOS, object), &inputs, &truths, (n, picture)))
+            .collect()
+    }
+
+    /// Every method's depth from the first `n` of `inputs`, scored against `truths` over the
+    /// inputs' masks: the first view, and all `n`. With `picture` `(path, m)` and `n` equal to
+    /// `m`, the first view's error sheet ([`write_error_sheet`]) too.
+    fn score(
+        &self,
+        (set, object): (&str, &str),
+        inputs: &[RgbView],
+        truths: &[Vec<f32>],
+        (n, picture): (usize, Option<(&Path, usize)>),
+    ) -> Result<DepthRecord> {
+        let wanted = picture.filter(|&(_, m)| m.clamp(1, inputs.len()) == n.clamp(1, inputs.len()));
+        let n = n.clamp(1, inputs.len());
+        let input = &inputs[..n];
+        let mask = |i: usize| inputs[i].mask.as_deref().unwrap_or(&[]);
+        // (method, each view's depth). The LSM cannot place its grid from one camera that
+        // does not look down (photographs from the side): there it has no row.
+        let mut predicted: Vec<(&str, Vec<Vec<f32>>)> = match lsm_depths(&self.lsm, input) {
+            Ok(depths) => vec![("lsm", depths)],
+            Err(crate::RuntimeError::Stereo { .. }) if n == 1 && set == REAL_PHOTOS => Vec::new(),
+            Err(e) => return Err(e.into()),
+        };
+        let mut reliability = Vec::new();
+        if n >= 2 {
+            let mvs: Vec<(Vec<f32>, Vec<f32>)> = mvs_depths(&self.mvs, input, 0.0)?
+                .into_iter()
+                .map(|v| (v.depth_m, v.confidence))
+                .collect();
+            let refined: Vec<(Vec<f32>, Vec<f32>)> = self
+                .refined
+                .depths(input)?
+                .into_iter()
+                .map(|v| (v.depth_m, v.confidence))
+                .collect();
+            for (method, views) in [("mvs", mvs), ("refined", refined)] {
+                let mut bins = vec![[0u64; 2]; CONFIDENCE_BINS];
+                for (i, ((depth, confidence), truth)) in views.iter().zip(truths).enumerate() {
+                    tally_confidence(&mut bins, (depth, confidence), truth, mask(i));
+                }
+                reliability.push((method.to_string(), bins));
+                predicted.push((method, views.into_iter().map(|(d, _)| d).collect()));
+            }
+            let hull_fill = SweepParams {
+                hull_where_unconfirmed: true,
+                ..SweepParams::default()
+            };
+            let swept = sweep_depths(input, &SweepParams::default())?;
+            let filled = sweep_depths(input, &hull_fill)?;
+            predicted.push(("sweep", swept.iter().map(|s| s.depth_m.clone()).collect()));
+            predicted.push((
+                "sweep-hull",
+                filled.into_iter().map(|s| s.depth_m).collect(),
+            ));
+            predicted.push(("hull", swept.into_iter().map(|s| s.hull_m).collect()));
+        }
+        if let Some((path, _)) = wanted.filter(|_| !predicted.is_empty()) {
+            let first: Vec<(&str, &[f32])> = predicted
+                .iter()
+                .map(|(m, depths)| (*m, depths[0].as_slice()))
+                .collect();
+            write_error_sheet(path, &inputs[0], &truths[0], &first)?;
+        }
+        let methods = predicted
+            .into_iter()
+            .map(|(method, depths)| {
+                let (mut top, mut all) = (DepthErrors::default(), DepthErrors::default());
+                for (i, (depth, truth)) in depths.iter().zip(truths).enumerate() {
+                    if i == 0 {
+                        top.add(depth, truth, mask(i));
+                    }
+                    all.add(depth, truth, mask(i));
+                }
+                (method.to_string(), top, all)
+            })
+            .collect();
+        Ok(DepthRecord {
+            object: object.to_string(),
+            set: set.to_string(),
+            views: n,
+            methods,
+            reliability,
+        })
+    }
+}
+
+/// The file name of the error sheet of `object` in `set` from `views` views.
+pub fn sheet_name(set: &str, object: &str, views: usize) -> String {
+    let name: String = format!("depth_{set}_{object}_{views}views")
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    format!("{name}.png")
+}
+
+/// The number of views the error sheets are drawn from, of a run's `views`: 5 (the planner's)
+/// when it is one, else the most.
+pub fn sheet_views(views: &[usize]) -> usize {
+    if views.contains(&5) {
+        5
+    } else {
+        views.iter().copied().max().unwrap_or(1)
+    }
+}
+
+/// Errors drawn up to this, millimetres (red); more is the same red.
+const SHEET_ERROR_MM: f32 = 20.0;
+
+/// The seed paper's Fig. 5 for one view: a PNG of columns at half resolution, the colour image
+/// and the true depth, then each method's predicted depth (top, on the truth's grey scale over
+/// the object) above its error over the object (bottom: black within 1 mm to red at
+/// [`SHEET_ERROR_MM`] and more; blue where the method predicted nothing; the rest dim).
+///
+/// # Errors
+/// A PNG that cannot be written.
+pub fn write_error_sheet(
+    path: &Path,
+    view: &RgbView,
+    truth: &[f32],
+    methods: &[(&str, &[f32])],
+) -> Result<()> {
+    let k = view.camera.intrinsics;
+    let (w, h) = (k.width as usize, k.height as usize);
+    let (tw, th) = (w / 2, h / 2);
+    let columns = 2 + methods.len();
+    let (sheet_w, sheet_h) = (tw * columns, 2 * th);
+    let mut sheet = vec![0u8; 3 * sheet_w * sheet_h];
+    let mask = view.mask.as_deref().unwrap_or(&[]);
+    let on = |i: usize| mask.get(i).copied().unwrap_or(false) && truth[i] > 0.0;
+    // The truth's grey scale: its 2nd to 98th percentile over the object.
+    let mut object: Vec<f32> = (0..truth.len())
+        .filter(|&i| on(i))
+        .map(|i| truth[i])
+        .collect();
+    object.sort_by(f32::total_cmp);
+    let at = |q: f32| {
+        object
+            .get(((object.len().max(1) - 1) as f32 * q) as usize)
+            .copied()
+    };
+    let (near, far) = (
+        at(0.02).unwrap_or(0.0),
+        at(0.98).unwrap_or(1.0).max(at(0.02).unwrap_or(0.0) + 1e-3),
+    );
+    let grey = |d: f32| -> [u8; 3] {
+        if d <= 0.0 {
+            return [0, 0, 0];
+        }
+        let g = (250.0 - 200.0 * ((d - near) / (far - near)).clamp(0.0, 1.0)) as u8;
+        [g, g, g]
+    };
+    let mut put = |col: usize, row: usize, x: usize, y: usize, c: [u8; 3]| {
+        let i = 3 * ((row * th + y) * sheet_w + col * tw + x);
+        sheet[i..i + 3].copy_from_slice(&c);
+    };
+    for y in 0..th {
+        for x in 0..tw {
+            let i = (2 * y) * w + 2 * x;
+            let dim = |c: [u8; 3]| c.map(|v| v / 3);
+            put(0, 0, x, y, view.rgb[i]);
+            put(
+                0,
+                1,
+                x,
+                y,
+                if on(i) { view.rgb[i] } else { dim(view.rgb[i]) },
+            );
+            let true_grey = grey(truth[i]);
+            put(1, 0, x, y, true_grey);
+            put(1, 1, x, y, if on(i) { true_grey } else { dim(true_grey) });
+            for (m, (_, depth)) in methods.iter().enumerate() {
+                let d = depth[i];
+                put(2 + m, 0, x, y, if on(i) { grey(d) } else { dim(grey(d)) });
+                let error = if !on(i) {
+                    [0, 0, 0]
+                } else if d <= 0.0 {
+                    [40, 80, 220]
+                } else {
+                    let mm = (1e3 * (d - truth[i]).abs() - 1.0).max(0.0);
+                    [(255.0 * (mm / (SHEET_ERROR_MM - 1.0)).min(1.0)) as u8, 0, 0]
+                };
+                put(2 + m, 1, x, y, error);
+            }
+        }
+    }
+    Ok(crate::images::write_png8(
+        path,
+        sheet_w as u32,
+        sheet_h as u32,
+        3,
+        &sheet,
+    )?)
 }
 
 #[cfg(test)]

@@ -510,8 +510,24 @@ pub fn evaluate_with(
         .filter(|(i, _)| mine(*i))
         .map(|(_, r)| r)
         .collect();
-    let total =
-        if per_object { my_objects.len() } else { 0 } + rounds.len() + usize::from(run_speed);
+    // Real photographs with a depth sensor's images beside the shared meshes
+    // (`real_rgb/*/`), for the depth suite of the run that writes the report.
+    let photographs: Vec<PathBuf> = match (&depth_suite, run.shard) {
+        (Some(_), None) => photograph_folders(&config.data),
+        _ => Vec::new(),
+    };
+    let total = if per_object { my_objects.len() } else { 0 }
+        + rounds.len()
+        + photographs.len()
+        + usize::from(run_speed);
+    // The first object of each set (of the whole run, whichever shard this is).
+    let mut first_of_set = std::collections::HashSet::new();
+    let mut sets_seen = std::collections::HashSet::new();
+    for object in &objects {
+        if sets_seen.insert(object.set.clone()) {
+            first_of_set.insert(format!("{}|{}", object.set, object.name));
+        }
+    }
     // One object's pieces of every per-object suite, or why it could not be evaluated.
     let one = |object: &&ObjectRef| -> ObjectDone {
         let id = format!("{}|{}", object.set, object.name);
@@ -525,8 +541,20 @@ pub fn evaluate_with(
             }
             if let Some(suite) = &depth_suite {
                 let key = format!("depth|{depth_setting}{id}");
+                // The first object of each set gets the error sheet, drawn again when missing.
+                let n = depth::sheet_views(&config.depth_views);
+                let sheet = pictures.join(depth::sheet_name(&object.set, &object.name, n));
+                let sheet = (first_of_set.contains(&id) && !sheet.is_file()).then_some(sheet);
+                let sheet = sheet.as_deref().map(|path| (path, n));
                 done.depth = match journal.get(&key)? {
-                    Some(records) => records,
+                    Some(records) => {
+                        if sheet.is_some() {
+                            let mesh = object.load()?;
+                            let what = (&*object.set, &*object.name);
+                            suite.run(&renderer, what, &mesh, &[n], (0, sheet))?;
+                        }
+                        records
+                    }
                     None => {
                         let mesh = object.load()?;
                         let records = suite.run(
@@ -534,7 +562,7 @@ pub fn evaluate_with(
                             (&object.set, &object.name),
                             &mesh,
                             &config.depth_views,
-                            0,
+                            (0, sheet),
                         )?;
                         journal.put(&key, &records)?
                     }
@@ -583,9 +611,39 @@ pub fn evaluate_with(
         let object = &to_do[i];
         progress.step(i + 1, total, &format!("{} {}", object.set, object.name));
     });
+    for (done, dir) in photographs.iter().enumerate() {
+        let name = dir
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+        let key = format!("depth-photographs|{depth_setting}{name}");
+        let work = || -> Result<Vec<depth::DepthRecord>> {
+            let Some(suite) = &depth_suite else {
+                return Ok(Vec::new());
+            };
+            let n = depth::sheet_views(&config.depth_views);
+            let sheet = pictures.join(depth::sheet_name(depth::REAL_PHOTOS, &name, n));
+            let sheet = (!sheet.is_file()).then_some(sheet);
+            let sheet = sheet.as_deref().map(|path| (path, n));
+            if let Some(records) = journal.get(&key)? {
+                if sheet.is_some() {
+                    suite.run_photographs(&name, dir, &[n], sheet)?;
+                }
+                return Ok(records);
+            }
+            journal.put(
+                &key,
+                &suite.run_photographs(&name, dir, &config.depth_views, sheet)?,
+            )
+        };
+        match work() {
+            Ok(records) => results.depth.extend(records),
+            Err(e) => results.skipped.push((key.clone(), e.to_string())),
+        }
+        progress.step(to_do.len() + done + 1, total, &key);
+    }
     // The clutter suite's planners and objects, built only when a round is missing.
     let mut suite: Option<clutter::ClutterSuite> = None;
-    let before = total - rounds.len();
+    let before = total - rounds.len() - usize::from(run_speed);
     // A round's key names its cameras and crops unless they are the defaults (the first
     // rounds were recorded so).
     let mut setting = String::new();
@@ -842,4 +900,19 @@ fn in_order<T: Sync, R: Send>(
             }
         }
     });
+}
+
+/// The folders of real photographs beside the shared mesh folder `data`: every folder of
+/// `data/../real_rgb` with a `cameras.json`, sorted (none when there is no such folder).
+fn photograph_folders(data: &Path) -> Vec<PathBuf> {
+    let root = data.join("..").join("real_rgb");
+    let mut found: Vec<PathBuf> = match std::fs::read_dir(&root) {
+        Ok(entries) => entries
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.join("cameras.json").is_file())
+            .collect(),
+        Err(_) => Vec::new(),
+    };
+    found.sort();
+    found
 }

@@ -38,7 +38,17 @@ pub(super) fn depth_tables(md: &mut String, results: &Results) {
             .map(|r| r.object.as_str())
             .collect::<std::collections::BTreeSet<_>>()
             .len();
-        let _ = writeln!(md, "### {set} ({objects} objects)\n");
+        if set == crate::evaluate::depth::REAL_PHOTOS {
+            let _ = writeln!(
+                md,
+                "### {set} ({objects} folders of `real_rgb`)\n\nCalibrated photographs with a \
+                 depth sensor's images beside the shared meshes: each folder's first N views, its \
+                 object masks given, against the sensor's depth over the masked pixels where it \
+                 has depth; the folder's first view in the top-down view's columns.\n"
+            );
+        } else {
+            let _ = writeln!(md, "### {set} ({objects} objects)\n");
+        }
         let _ = writeln!(
             md,
             "| method | views | top-down: median (mm) | mean (mm) | predicted | within 5 mm | normalised | all views: median (mm) | mean (mm) | predicted | within 5 mm | normalised |\n|---|---|---|---|---|---|---|---|---|---|---|---|"
@@ -73,6 +83,22 @@ pub(super) fn depth_tables(md: &mut String, results: &Results) {
         }
         md.push('\n');
         reliability_table(md, &records, &results.config.depth_views);
+        // The error sheet of the set's first object (the seed paper's Fig. 5).
+        let n = crate::evaluate::depth::sheet_views(&results.config.depth_views);
+        if let Some(first) = records.iter().find(|r| r.views == n) {
+            let names: Vec<&str> = first.methods.iter().map(|(m, ..)| m.as_str()).collect();
+            let _ = writeln!(
+                md,
+                "The first view of {} from {n} views (the seed paper's Fig. 5): colour, true \
+                 depth, then {}; above, the depth; below, the error over the object (black \
+                 within 1 mm to red at 20 mm or more; blue: not predicted).\n\n![depth errors \
+                 of {}](pictures/{})\n",
+                first.object,
+                names.join(", "),
+                first.object,
+                crate::evaluate::depth::sheet_name(&first.set, &first.object, n)
+            );
+        }
     }
 }
 
