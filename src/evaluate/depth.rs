@@ -372,17 +372,7 @@ impl DepthSuite {
 
 /// The file name of the error sheet of `object` in `set` from `views` views.
 pub fn sheet_name(set: &str, object: &str, views: usize) -> String {
-    let name: String = format!("depth_{set}_{object}_{views}views")
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect();
-    format!("{name}.png")
+    super::report::png_name(&format!("depth_{set}_{object}_{views}views"))
 }
 
 /// The number of views the error sheets are drawn from, of a run's `views`: 5 (the planner's)

@@ -21,7 +21,16 @@ const COLOR_NAMES: [&str; 5] = ["green", "blue", "orange", "purple", "cyan"];
 
 /// The file name of the picture of `placed`'s grasps under `pictures/`.
 pub fn picture_name(placed: &PlacedObject) -> String {
-    let name: String = format!("{}_{}_pose{}", placed.set, placed.object, placed.pose)
+    png_name(&format!(
+        "{}_{}_pose{}",
+        placed.set, placed.object, placed.pose
+    ))
+}
+
+/// `text` as a PNG's file name: every character but ASCII letters, digits, `-` and `_` made
+/// `_`.
+pub fn png_name(text: &str) -> String {
+    let name: String = text
         .chars()
         .map(|c| {
             if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
