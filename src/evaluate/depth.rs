@@ -102,13 +102,17 @@ impl DepthErrors {
         }
     }
 
-    /// The median error of the predicted pixels, millimetres (to 0.1 mm; NaN when none).
+    /// The median error of the predicted pixels, millimetres (to 0.1 mm; infinite when it is
+    /// 50 mm or more, past the histogram; NaN when none).
     pub fn median_mm(&self) -> f64 {
         let half = self.predicted.div_ceil(2);
         let mut seen = 0u64;
         for (bin, &count) in self.histogram.iter().enumerate() {
             seen += u64::from(count);
             if seen >= half && count > 0 {
+                if bin == BINS - 1 {
+                    return f64::INFINITY;
+                }
                 return (bin as f64 + 0.5) * BIN_M * 1e3;
             }
         }
@@ -388,10 +392,12 @@ pub fn sheet_views(views: &[usize]) -> usize {
 /// Errors drawn up to this, millimetres (red); more is the same red.
 const SHEET_ERROR_MM: f32 = 20.0;
 
-/// The seed paper's Fig. 5 for one view: a PNG of columns at half resolution, the colour image
-/// and the true depth, then each method's predicted depth (top, on the truth's grey scale over
-/// the object) above its error over the object (bottom: black within 1 mm to red at
-/// [`SHEET_ERROR_MM`] and more; blue where the method predicted nothing; the rest dim).
+/// The seed paper's Fig. 5 for one view: a PNG of columns, each the object's box in the view
+/// (half again as large, at least 64 pixels, at full resolution; the whole view at half
+/// resolution when there is no mask): the colour image and the true depth, then each method's
+/// predicted depth (top, on the truth's grey scale over the object) above its error over the
+/// object (bottom: black within 1 mm to red at [`SHEET_ERROR_MM`] and more; blue where the
+/// method predicted nothing; the rest dim).
 ///
 /// # Errors
 /// A PNG that cannot be written.
@@ -403,7 +409,7 @@ pub fn write_error_sheet(
 ) -> Result<()> {
     let k = view.camera.intrinsics;
     let (w, h) = (k.width as usize, k.height as usize);
-    let (tw, th) = (w / 2, h / 2);
+    let (x0, y0, tw, th, step) = object_box(view.mask.as_deref(), w, h);
     let columns = 2 + methods.len();
     let (sheet_w, sheet_h) = (tw * columns, 2 * th);
     let mut sheet = vec![0u8; 3 * sheet_w * sheet_h];
@@ -437,7 +443,7 @@ pub fn write_error_sheet(
     };
     for y in 0..th {
         for x in 0..tw {
-            let i = (2 * y) * w + 2 * x;
+            let i = (y0 + step * y) * w + x0 + step * x;
             let dim = |c: [u8; 3]| c.map(|v| v / 3);
             put(0, 0, x, y, view.rgb[i]);
             put(
@@ -474,6 +480,32 @@ pub fn write_error_sheet(
     )?)
 }
 
+/// The tile of an error sheet in a `w` x `h` view: `(x0, y0, width, height, step)`, the box of
+/// the mask's pixels half again as large (at least 64 pixels a side, inside the view) at full
+/// resolution, or the whole view at half resolution without a mask or object pixels.
+fn object_box(mask: Option<&[bool]>, w: usize, h: usize) -> (usize, usize, usize, usize, usize) {
+    let whole = (0, 0, w / 2, h / 2, 2);
+    let Some(mask) = mask else {
+        return whole;
+    };
+    let (mut lo, mut hi) = ([usize::MAX; 2], [0usize; 2]);
+    for (i, _) in mask.iter().enumerate().filter(|(_, m)| **m) {
+        let (x, y) = (i % w, i / w);
+        lo = [lo[0].min(x), lo[1].min(y)];
+        hi = [hi[0].max(x), hi[1].max(y)];
+    }
+    if lo[0] > hi[0] {
+        return whole;
+    }
+    let side = |a: usize, b: usize, n: usize| {
+        let size = ((b - a + 1) * 3 / 2).max(64).min(n);
+        let start = ((a + b) / 2).saturating_sub(size / 2).min(n - size);
+        (start, size)
+    };
+    let ((x0, tw), (y0, th)) = (side(lo[0], hi[0], w), side(lo[1], hi[1], h));
+    (x0, y0, tw, th, 1)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -494,5 +526,12 @@ mod tests {
         a.merge(&b);
         assert_eq!(a.predicted, 7);
         assert!(a.median_mm() < 1.0, "{}", a.median_mm());
+        let mut far = DepthErrors::default();
+        far.add(&[0.6, 0.6, 0.501, 0.0, 0.0], &truth, &mask);
+        assert_eq!(
+            far.median_mm(),
+            f64::INFINITY,
+            "100 mm off: past the histogram"
+        );
     }
 }

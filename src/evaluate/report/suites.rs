@@ -69,9 +69,12 @@ pub(super) fn depth_tables(md: &mut String, results: &Results) {
                     continue;
                 }
                 let cells = |e: &DepthErrors| {
+                    let median = match e.median_mm() {
+                        m if m.is_infinite() => "50 or more".to_string(),
+                        m => format!("{m:.1}"),
+                    };
                     format!(
-                        "{:.1} | {:.1} | {:.0}% | {:.0}% | {:.4}",
-                        e.median_mm(),
+                        "{median} | {:.1} | {:.0}% | {:.0}% | {:.4}",
                         e.mean_mm(),
                         100.0 * e.predicted_share(),
                         100.0 * e.within_5mm_share(),
