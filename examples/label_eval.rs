@@ -22,9 +22,9 @@
 //! `DIR/meshes/NAME.obj` (the mesh, object frame) and `DIR/meshes/NAME.parts.obj` (the convex
 //! parts the trial collides with, one `o` group a part, object frame).
 //!
-//! Reports, per category or source and overall, each label's confusion table against the outcome, its
-//! false-positive rate (outcome failed, label positive, over outcome failed) and the share of
-//! its positives that failed.
+//! Reports, per category or source and overall, each label's confusion table against the
+//! outcome, its false-positive rate (outcome failed, label positive, over outcome failed) and
+//! the share of its positives that failed.
 
 mod common;
 

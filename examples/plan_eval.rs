@@ -279,7 +279,7 @@ struct Tally {
     seconds: f64,
     /// With --top10: per object, the share of its top choices (up to 10) that held.
     top10: Vec<f64>,
-    /// Per category (the real meshes as one).
+    /// Per group: the built-in category, or the real mesh's source or household category.
     by_group: BTreeMap<String, Group>,
     /// (held, tried) by the chosen approach's tilt from straight down ([`TILT_BINS_DEG`]).
     by_tilt: [(usize, usize); 3],

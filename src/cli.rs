@@ -98,6 +98,26 @@ impl ObjectArgs {
     }
 }
 
+/// The objects of the evaluation's sets named `names` (as `evaluate --set` names them; see
+/// [`crate::evaluate::objects::objects_of_sets`]), for a command: a name that is not a set is
+/// an error about `--set`.
+///
+/// # Errors
+/// That, or a manifest or folder that cannot be read.
+pub fn objects_of_sets(
+    names: &[String],
+    per_category: u32,
+    data: &std::path::Path,
+    max_meshes: usize,
+) -> CliResult<Vec<crate::evaluate::objects::ObjectRef>> {
+    crate::evaluate::objects::objects_of_sets(names, per_category, data, max_meshes).map_err(|e| {
+        match e {
+            crate::Error::Evaluate { problem } => format!("--{problem}").into(),
+            e => e.into(),
+        }
+    })
+}
+
 /// Many objects for a dataset: mesh files and folders, or the built-in library.
 #[derive(clap::Args, Debug, Clone)]
 pub struct LibraryArgs {

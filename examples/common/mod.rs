@@ -42,16 +42,8 @@ pub fn load_sets(args: &SetArgs, data: &std::path::Path) -> Result<Vec<Loaded>, 
     } else {
         args.sets.clone()
     };
-    let found = mvgrasp::evaluate::objects::objects_of_sets(
-        &names,
-        args.per_category,
-        data,
-        args.max_meshes,
-    )
-    .map_err(|e| match e {
-        mvgrasp::Error::Evaluate { problem } => format!("--{problem}"),
-        e => e.to_string(),
-    })?;
+    let found = mvgrasp::cli::objects_of_sets(&names, args.per_category, data, args.max_meshes)
+        .map_err(|e| e.to_string())?;
     let mut loaded = Vec::new();
     for object in found {
         match object.load() {

@@ -248,6 +248,9 @@ fn run(args: &Args) -> CliResult<()> {
     {
         return Err(format!("--policy {p}: expected one of {}", known.join(", ")).into());
     }
+    if args.jobs == 0 {
+        return Err("--jobs 0: expected at least 1".into());
+    }
     let mut progress: Box<dyn Progress> = if std::io::stderr().is_terminal() && !args.plain {
         let bar = ProgressBar::new(0);
         bar.set_style(
@@ -258,9 +261,6 @@ fn run(args: &Args) -> CliResult<()> {
     } else {
         Box::new(Lines)
     };
-    if args.jobs == 0 {
-        return Err("--jobs 0: expected at least 1".into());
-    }
     let run = RunOptions {
         jobs: args.jobs,
         shard: args.shard,

@@ -13,14 +13,13 @@
 //! after an interruption and it takes up where it stopped (the same settings give the same
 //! bytes).
 
-use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Parser;
-use mvgrasp::cli::CliResult;
+use mvgrasp::cli::{CliResult, objects_of_sets};
 use mvgrasp::evaluate::journal::Journal;
-use mvgrasp::evaluate::objects::objects_of_sets;
+use mvgrasp::grasp_dataset::shard::write_atomically;
 use mvgrasp::ranker_data::{RankerData, RankerSample};
 use mvgrasp::render::{Backend, Renderer};
 
@@ -59,12 +58,7 @@ fn run(args: &Args) -> CliResult<()> {
     } else {
         args.sets.clone()
     };
-    let found = objects_of_sets(&names, args.per_category, &args.data, args.max_meshes).map_err(
-        |e| match e {
-            mvgrasp::Error::Evaluate { problem } => format!("--{problem}"),
-            e => e.to_string(),
-        },
-    )?;
+    let found = objects_of_sets(&names, args.per_category, &args.data, args.max_meshes)?;
     if found.is_empty() {
         return Err(format!(
             "no objects in {} (--data {})",
@@ -79,6 +73,7 @@ fn run(args: &Args) -> CliResult<()> {
     // The planner, made only when some object is missing.
     let mut data: Option<RankerData> = None;
     let mut all: Vec<RankerSample> = Vec::new();
+    let mut skipped = 0;
     for (done, object) in found.iter().enumerate() {
         // The key names the ordering, so that a ranked run does not take unranked records.
         let key = format!(
@@ -94,8 +89,19 @@ fn run(args: &Args) -> CliResult<()> {
                     Some(ref data) => data,
                     None => data.insert(RankerData::new(args.ranked)?),
                 };
-                let samples = data.samples(&renderer, &object.name, &object.load()?)?;
-                journal.put(&key, &samples)?
+                // An object the planner or the trial refuses (a broken or oversized mesh) is
+                // reported and left out, as the evaluation leaves it out.
+                let made = object
+                    .load()
+                    .and_then(|mesh| data.samples(&renderer, &object.name, &mesh));
+                match made {
+                    Ok(samples) => journal.put(&key, &samples)?,
+                    Err(e) => {
+                        eprintln!("skipping {} {}: {e}", object.set, object.name);
+                        skipped += 1;
+                        continue;
+                    }
+                }
             }
         };
         let held = samples.iter().filter(|s| s.held == Some(true)).count();
@@ -110,25 +116,20 @@ fn run(args: &Args) -> CliResult<()> {
         all.extend(samples);
     }
     let path = args.out.join("rescored.jsonl");
-    let partial = args.out.join("rescored.jsonl.partial");
-    let mut file = std::io::BufWriter::new(
-        std::fs::File::create(&partial).map_err(|e| format!("{}: {e}", partial.display()))?,
-    );
+    let mut lines = String::new();
     for sample in &all {
-        writeln!(file, "{}", serde_json::to_string(sample)?)?;
+        lines.push_str(&serde_json::to_string(sample)?);
+        lines.push('\n');
     }
-    file.into_inner()
-        .map_err(|e| format!("{}: {e}", partial.display()))?
-        .sync_all()?;
-    std::fs::rename(&partial, &path).map_err(|e| format!("{}: {e}", path.display()))?;
+    write_atomically(&path, lines.as_bytes())?;
     let held = all.iter().filter(|s| s.held == Some(true)).count();
     let tried = all
         .iter()
         .filter(|s| s.held.is_some() && s.failed_at.as_deref() != Some("Settle"))
         .count();
     println!(
-        "{} objects, {} candidates ({held} held of {tried} tried): {}",
-        found.len(),
+        "{} objects ({skipped} skipped), {} candidates ({held} held of {tried} tried): {}",
+        found.len() - skipped,
         all.len(),
         path.display()
     );

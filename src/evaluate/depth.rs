@@ -281,6 +281,23 @@ impl DepthSuite {
                 problem: format!("{}: the photographs need masks", dir.display()),
             });
         }
+        // The folder's readers check each file against its camera; the two against each other:
+        let sizes = |k: &mvgrasp_geometry::Intrinsics| (k.width, k.height);
+        if sensor.len() != inputs.len()
+            || inputs
+                .iter()
+                .zip(&sensor)
+                .any(|(c, d)| sizes(&c.camera.intrinsics) != sizes(&d.camera.intrinsics))
+        {
+            return Err(crate::Error::Evaluate {
+                problem: format!(
+                    "{}: {} colour views and {} depth images of other sizes",
+                    dir.display(),
+                    inputs.len(),
+                    sensor.len()
+                ),
+            });
+        }
         let truths: Vec<Vec<f32>> = sensor.iter().map(|v| v.depth.as_slice().to_vec()).collect();
         let mut counts: Vec<usize> = views.iter().map(|&n| n.clamp(1, inputs.len())).collect();
         counts.dedup();
@@ -305,10 +322,10 @@ impl DepthSuite {
         let input = &inputs[..n];
         let mask = |i: usize| inputs[i].mask.as_deref().unwrap_or(&[]);
         // (method, each view's depth). The LSM cannot place its grid from one camera that
-        // does not look down (photographs from the side): there it has no row.
+        // does not look down at the table (photographs from the side): it has no row there.
         let mut predicted: Vec<(&str, Vec<Vec<f32>>)> = match lsm_depths(&self.lsm, input) {
             Ok(depths) => vec![("lsm", depths)],
-            Err(crate::RuntimeError::Stereo { .. }) if n == 1 && set == REAL_PHOTOS => Vec::new(),
+            Err(crate::RuntimeError::Stereo { .. }) if n == 1 => Vec::new(),
             Err(e) => return Err(e.into()),
         };
         let mut reliability = Vec::new();
@@ -390,7 +407,7 @@ pub fn sheet_views(views: &[usize]) -> usize {
 }
 
 /// Errors drawn up to this, millimetres (red); more is the same red.
-const SHEET_ERROR_MM: f32 = 20.0;
+pub const SHEET_ERROR_MM: f32 = 20.0;
 
 /// The seed paper's Fig. 5 for one view: a PNG of columns, each the object's box in the view
 /// (half again as large, at least 64 pixels, at full resolution; the whole view at half
@@ -415,21 +432,12 @@ pub fn write_error_sheet(
     let mut sheet = vec![0u8; 3 * sheet_w * sheet_h];
     let mask = view.mask.as_deref().unwrap_or(&[]);
     let on = |i: usize| mask.get(i).copied().unwrap_or(false) && truth[i] > 0.0;
-    // The truth's grey scale: its 2nd to 98th percentile over the object.
-    let mut object: Vec<f32> = (0..truth.len())
-        .filter(|&i| on(i))
-        .map(|i| truth[i])
-        .collect();
-    object.sort_by(f32::total_cmp);
-    let at = |q: f32| {
-        object
-            .get(((object.len().max(1) - 1) as f32 * q) as usize)
-            .copied()
-    };
-    let (near, far) = (
-        at(0.02).unwrap_or(0.0),
-        at(0.98).unwrap_or(1.0).max(at(0.02).unwrap_or(0.0) + 1e-3),
-    );
+    // The truth's grey scale, over the object.
+    let object = view
+        .mask
+        .clone()
+        .and_then(|pixels| mvgrasp_planner::Mask::new(k.width, k.height, pixels).ok());
+    let (near, far) = crate::grasps_file::depth_span(truth, object.as_ref());
     let grey = |d: f32| -> [u8; 3] {
         if d <= 0.0 {
             return [0, 0, 0];

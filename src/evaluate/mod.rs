@@ -308,7 +308,6 @@ pub fn evaluate_with(
     progress: &mut dyn Progress,
     run: RunOptions,
 ) -> Result<Results> {
-    let jobs = run.jobs;
     let invalid = |problem: String| Error::Evaluate { problem };
     // Every name checked before anything is written.
     for set in &config.sets {
@@ -542,13 +541,14 @@ pub fn evaluate_with(
             if let Some(suite) = &depth_suite {
                 let key = format!("depth|{depth_setting}{id}");
                 // The first object of each set gets the error sheet, drawn again when missing.
-                let n = depth::sheet_views(&config.depth_views);
-                let sheet = pictures.join(depth::sheet_name(&object.set, &object.name, n));
-                let sheet = (first_of_set.contains(&id) && !sheet.is_file()).then_some(sheet);
-                let sheet = sheet.as_deref().map(|path| (path, n));
+                let sheet = first_of_set
+                    .contains(&id)
+                    .then(|| missing_sheet(&pictures, (&object.set, &object.name), config))
+                    .flatten();
+                let sheet = sheet.as_ref().map(|(path, n)| (path.as_path(), *n));
                 done.depth = match journal.get(&key)? {
                     Some(records) => {
-                        if sheet.is_some() {
+                        if let Some((_, n)) = sheet {
                             let mesh = object.load()?;
                             let what = (&*object.set, &*object.name);
                             suite.run(&renderer, what, &mesh, &[n], (0, sheet))?;
@@ -602,7 +602,7 @@ pub fn evaluate_with(
     let to_do: &[&ObjectRef] = if per_object { &my_objects } else { &[] };
     // The objects on `jobs` threads, their records taken in the objects' order: the same
     // results whatever the number of jobs.
-    in_order(to_do, jobs, one, |i, done| {
+    in_order(to_do, run.jobs, one, |i, done| {
         results.objects.extend(done.placed);
         results.grasps.extend(done.grasps);
         results.depth.extend(done.depth);
@@ -611,35 +611,30 @@ pub fn evaluate_with(
         let object = &to_do[i];
         progress.step(i + 1, total, &format!("{} {}", object.set, object.name));
     });
-    for (done, dir) in photographs.iter().enumerate() {
-        let name = dir
-            .file_name()
-            .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-        let key = format!("depth-photographs|{depth_setting}{name}");
-        let work = || -> Result<Vec<depth::DepthRecord>> {
-            let Some(suite) = &depth_suite else {
-                return Ok(Vec::new());
-            };
-            let n = depth::sheet_views(&config.depth_views);
-            let sheet = pictures.join(depth::sheet_name(depth::REAL_PHOTOS, &name, n));
-            let sheet = (!sheet.is_file()).then_some(sheet);
-            let sheet = sheet.as_deref().map(|path| (path, n));
-            if let Some(records) = journal.get(&key)? {
-                if sheet.is_some() {
-                    suite.run_photographs(&name, dir, &[n], sheet)?;
+    if let Some(suite) = &depth_suite {
+        for (done, dir) in photographs.iter().enumerate() {
+            let name = dir
+                .file_name()
+                .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+            let key = format!("depth-photographs|{depth_setting}{name}");
+            let work = || -> Result<Vec<depth::DepthRecord>> {
+                let sheet = missing_sheet(&pictures, (depth::REAL_PHOTOS, &name), config);
+                let sheet = sheet.as_ref().map(|(path, n)| (path.as_path(), *n));
+                if let Some(records) = journal.get(&key)? {
+                    if let Some((_, n)) = sheet {
+                        suite.run_photographs(&name, dir, &[n], sheet)?;
+                    }
+                    return Ok(records);
                 }
-                return Ok(records);
+                let records = suite.run_photographs(&name, dir, &config.depth_views, sheet)?;
+                journal.put(&key, &records)
+            };
+            match work() {
+                Ok(records) => results.depth.extend(records),
+                Err(e) => results.skipped.push((key.clone(), e.to_string())),
             }
-            journal.put(
-                &key,
-                &suite.run_photographs(&name, dir, &config.depth_views, sheet)?,
-            )
-        };
-        match work() {
-            Ok(records) => results.depth.extend(records),
-            Err(e) => results.skipped.push((key.clone(), e.to_string())),
+            progress.step(to_do.len() + done + 1, total, &key);
         }
-        progress.step(to_do.len() + done + 1, total, &key);
     }
     // The clutter suite's planners and objects, built only when a round is missing.
     let mut suite: Option<clutter::ClutterSuite> = None;
@@ -734,8 +729,12 @@ fn check_config(config: &EvalConfig, out: &Path) -> Result<()> {
                 path.display()
             ),
         }),
+        // Through a file of this process's own and a rename: the shards of a run spread over
+        // machines may write it at once, and none may read half of it.
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            std::fs::write(&path, text).map_err(Error::io("write", &path))
+            let tmp = out.join(format!("config.json.{}.tmp", std::process::id()));
+            std::fs::write(&tmp, text).map_err(Error::io("write", &tmp))?;
+            std::fs::rename(&tmp, &path).map_err(Error::io("rename", &tmp))
         }
         Err(e) => Err(Error::io("read", &path)(e)),
     }
@@ -900,6 +899,18 @@ fn in_order<T: Sync, R: Send>(
             }
         }
     });
+}
+
+/// The error sheet of `object` in `set` and the number of views it is drawn from, when the
+/// sheet is not in `pictures` yet.
+fn missing_sheet(
+    pictures: &Path,
+    (set, object): (&str, &str),
+    config: &EvalConfig,
+) -> Option<(PathBuf, usize)> {
+    let n = depth::sheet_views(&config.depth_views);
+    let path = pictures.join(depth::sheet_name(set, object, n));
+    (!path.is_file()).then_some((path, n))
 }
 
 /// The folders of real photographs beside the shared mesh folder `data`: every folder of

@@ -16,7 +16,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use mvgrasp_geometry::objects::{Category, generate};
+use mvgrasp_geometry::objects::default_object;
 use mvgrasp_infer::bench::{median, time_gqcnn};
 use mvgrasp_render::Renderer;
 use serde::{Deserialize, Serialize};
@@ -101,7 +101,7 @@ impl SpeedSuite {
     /// # Errors
     /// A renderer, network or trial error (a missing peer is recorded, not an error).
     pub fn run(&self, renderer: &Renderer, policies: &[ReadyPolicy]) -> Result<SpeedRecord> {
-        let object = generate(Category::Mug, 0, 0)?;
+        let object = default_object()?;
         let mut stages = Vec::new();
         for policy in policies {
             let mut timings = Vec::new();

@@ -10,11 +10,13 @@ use crate::error::Result;
 use crate::model::{Gqcnn, GqcnnWorkspace};
 use crate::tensor::Tensor;
 
-/// SplitMix64, as `bench_torch.py` has it: the same numbers in both.
-struct SplitMix64(u64);
+/// SplitMix64 (Steele, Lea, Flood 2014), as `bench_torch.py` has it: the same numbers in both;
+/// the state is the seed.
+pub struct SplitMix64(pub u64);
 
 impl SplitMix64 {
-    fn next_u64(&mut self) -> u64 {
+    /// The next 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);

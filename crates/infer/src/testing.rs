@@ -4,20 +4,17 @@
 
 use crate::tensor::Tensor;
 
-/// SplitMix64: small, seeded, the same numbers on every platform.
-pub(crate) struct Rng(u64);
+/// SplitMix64 ([`crate::bench::SplitMix64`]): small, seeded, the same numbers on every
+/// platform.
+pub(crate) struct Rng(crate::bench::SplitMix64);
 
 impl Rng {
     pub(crate) fn new(seed: u64) -> Self {
-        Self(seed)
+        Self(crate::bench::SplitMix64(seed))
     }
 
     pub(crate) fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        self.0.next_u64()
     }
 
     /// Uniform in `[lo, hi)`.

@@ -392,9 +392,10 @@ pub fn write_contact_sheet(
     write_png8(path, sheet_w as u32, sheet_h as u32, 3, &sheet)
 }
 
-/// The grey scale's ends: the 2nd and 98th percentiles of the positive depths, over the
-/// object's pixels where a mask is given, else over all.
-fn depth_span(depth: &[f32], mask: Option<&mvgrasp_planner::Mask>) -> (f32, f32) {
+/// The grey scale's ends of a depth picture: the 2nd and 98th percentiles of the positive
+/// depths, over the object's pixels where a mask is given (all of them when it has none), else
+/// over all; the far end at least 1 mm past the near one.
+pub fn depth_span(depth: &[f32], mask: Option<&mvgrasp_planner::Mask>) -> (f32, f32) {
     let width = mask.map_or(1, |m| m.width() as usize);
     let on_object = |i: usize| mask.is_none_or(|m| m.at((i % width) as i64, (i / width) as i64));
     let mut valid: Vec<f32> = depth

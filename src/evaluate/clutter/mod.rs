@@ -24,11 +24,11 @@
 //! like the table). Depth from RGB needs 2 views or more. The grasp is tried in rapier among
 //! the others ([`mvgrasp_grasp::physics::simulate_grasp_among`]) on the object nearest its
 //! centre; it must come out alone. A held object is taken away and the rest settle (and what
-//! leaves the workspace goes, uncleared), as VGN's simulator does; after a failure the scene is as it
-//! was (VGN carries the failed grasp's pushes to the next) and the next attempt samples with
-//! the next seed. When the object does not stay at rest before the hand comes (the trial's
-//! settle) the scene is settled again and the attempt repeated, uncounted; after two such
-//! repeats the object is taken away uncounted: it tests the scene, not the grasp.
+//! leaves the workspace goes, uncleared), as VGN's simulator does; after a failure the scene
+//! is as it was (VGN carries the failed grasp's pushes to the next) and the next attempt
+//! samples with the next seed. When the object does not stay at rest before the hand comes
+//! (the trial's settle) the scene is settled again and the attempt repeated, uncounted; after
+//! two such repeats the object is taken away uncounted: it tests the scene, not the grasp.
 //!
 //! Success rate: held of grasps tried; cleared: held of the objects the scene held (less those
 //! taken away uncounted), as VGN and GIGA report them.

@@ -94,10 +94,11 @@ pub(super) fn depth_tables(md: &mut String, results: &Results) {
                 md,
                 "The first view of {} from {n} views (the seed paper's Fig. 5): colour, true \
                  depth, then {}; above, the depth; below, the error over the object (black \
-                 within 1 mm to red at 20 mm or more; blue: not predicted).\n\n![depth errors \
+                 within 1 mm to red at {} mm or more; blue: not predicted).\n\n![depth errors \
                  of {}](pictures/{})\n",
                 first.object,
                 names.join(", "),
+                crate::evaluate::depth::SHEET_ERROR_MM,
                 first.object,
                 crate::evaluate::depth::sheet_name(&first.set, &first.object, n)
             );
@@ -363,9 +364,7 @@ pub(super) fn speed_tables(md: &mut String, speed: &crate::evaluate::speed::Spee
             .iter()
             .filter(|t| t.runtime != "mvgrasp" && (&t.network, t.batch) == (&n.network, n.batch))
             .map(|t| t.crops_per_s)
-            .fold(None, |best: Option<f64>, c| {
-                Some(best.map_or(c, |b| b.max(c)))
-            });
+            .reduce(f64::max);
         let ratio = match torch {
             Some(t) if n.runtime == "mvgrasp" => format!("{:.1}x", n.crops_per_s / t),
             _ => "-".into(),

@@ -3,21 +3,19 @@
 #![allow(dead_code, clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use mvgrasp_infer::Tensor;
+use mvgrasp_infer::bench::SplitMix64;
 
-/// SplitMix64: small, seeded, the same numbers on every platform.
-pub struct Rng(u64);
+/// SplitMix64 (`mvgrasp_infer::bench::SplitMix64`): small, seeded, the same numbers on every
+/// platform.
+pub struct Rng(SplitMix64);
 
 impl Rng {
     pub fn new(seed: u64) -> Self {
-        Self(seed)
+        Self(SplitMix64(seed))
     }
 
     fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        self.0.next_u64()
     }
 
     /// A tensor of `shape` with values uniform in `[-scale, scale)`.
